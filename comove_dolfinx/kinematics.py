@@ -1,0 +1,222 @@
+"""Co-moving (convected) kinematics in UFL.
+
+The co-moving coordinates are the reference Cartesian positions X, so the convected base vectors
+g_I are the columns of F and every tensor is stored in Cartesian components (theory.md section 2).
+
+Conventions
+-----------
+* 2D models live in a 3x3 embedding: indices 0, 1 are in-plane (x, y) or (r, z), index 2 is the
+  out-of-plane direction (z in plane strain/stress, the hoop direction theta in axisymmetry).
+  ``F3 = [[F00, F01, 0], [F10, F11, 0], [0, 0, F22]]`` with F22 = 1 (plane strain), 1 + u_r/r
+  (axisymmetry) or the thickness stretch given by the constitutive law (plane stress).
+* Symmetric tensors are stored as 4-vectors (xx, yy, zz, xy) of tensor components (shear once);
+  :func:`to_vec` and :func:`to_tensor` convert.
+* The S-R decomposition (Chen) of a displacement gradient H: F = I + H = S + R with S symmetric
+  (a strain, zero for a rigid motion) and R a rotation, in the singularity-free form
+  c = sqrt(1 - W:W/2), R = I + W + W.W/(1 + c), S = sym H - W.W/(1 + c), W = skew H
+  (theory.md 1.2). It exists while W:W/2 <= 1 and is applied to increments, where that always holds.
+"""
+from __future__ import annotations
+
+import ufl
+
+PLANE_STRAIN = "plane_strain"
+PLANE_STRESS = "plane_stress"
+AXISYMMETRIC = "axisymmetric"
+MODELS = (PLANE_STRAIN, PLANE_STRESS, AXISYMMETRIC)
+
+
+# --------------------------------------------------------------------------------------------
+# Storage helpers
+# --------------------------------------------------------------------------------------------
+def to_vec(T: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """Symmetric 3x3 tensor -> 4-vector (xx, yy, zz, xy)."""
+    return ufl.as_vector([T[0, 0], T[1, 1], T[2, 2], T[0, 1]])
+
+
+def to_tensor(s: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """4-vector (xx, yy, zz, xy) -> symmetric 3x3 tensor."""
+    return ufl.as_tensor([[s[0], s[3], 0], [s[3], s[1], 0], [0, 0, s[2]]])
+
+
+def embed(A2: ufl.core.expr.Expr, a22) -> ufl.core.expr.Expr:
+    """2x2 in-plane block and an out-of-plane scalar -> 3x3 block-diagonal tensor."""
+    return ufl.as_tensor([[A2[0, 0], A2[0, 1], 0], [A2[1, 0], A2[1, 1], 0], [0, 0, a22]])
+
+
+def von_mises(sigma: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """Von Mises equivalent stress sqrt(3/2 s:s) of a 3x3 stress."""
+    s = ufl.dev(sigma)
+    return ufl.sqrt(1.5 * ufl.inner(s, s))
+
+
+# --------------------------------------------------------------------------------------------
+# Embeddings of the 2D models
+# --------------------------------------------------------------------------------------------
+class Kinematics:
+    """Displacement gradients of a 2D model embedded in 3x3.
+
+    Parameters
+    ----------
+    model:
+        ``"plane_strain"``, ``"plane_stress"`` or ``"axisymmetric"`` (x = r, y = z).
+    x:
+        ``ufl.SpatialCoordinate`` of the reference mesh.
+    thickness:
+        Out-of-plane thickness b of plane models (forces are per b); ignored in axisymmetry, where
+        integrals carry the weight 2 pi r and forces are totals over the circumference.
+    """
+
+    def __init__(self, model: str, x, thickness: float = 1.0):
+        if model not in MODELS:
+            raise ValueError(f"unknown model {model!r}: choose one of {', '.join(MODELS)}")
+        self.model = model
+        self.x = x
+        self.thickness = thickness
+
+    @property
+    def axisymmetric(self) -> bool:
+        return self.model == AXISYMMETRIC
+
+    def weight(self):
+        """Volume weight of the 2D integrals: 2 pi r (axisymmetry) or the thickness b."""
+        return 2.0 * ufl.pi * self.x[0] if self.axisymmetric else self.thickness
+
+    def grad3(self, w) -> ufl.core.expr.Expr:
+        """3x3 embedded reference gradient of a displacement-like field w (zz: w_r/r or 0)."""
+        zz = w[0] / self.x[0] if self.axisymmetric else 0
+        return embed(ufl.grad(w), zz)
+
+    def F3(self, u, F22=None) -> ufl.core.expr.Expr:
+        """Deformation gradient; in plane stress the thickness stretch F22 must be given."""
+        if self.model == PLANE_STRESS:
+            if F22 is None:
+                raise ValueError("plane stress: the thickness stretch F22 comes from the material")
+            return embed(ufl.Identity(2) + ufl.grad(u), F22)
+        return ufl.Identity(3) + self.grad3(u)
+
+
+# --------------------------------------------------------------------------------------------
+# Co-moving metric, base and Christoffel symbols
+# --------------------------------------------------------------------------------------------
+def metric(F):
+    """Co-moving metric g_IJ = g_I . g_J = (F^T F)_IJ."""
+    return F.T * F
+
+
+def inverse_metric(F):
+    """Contravariant metric g^IJ = (C^-1)_IJ."""
+    return ufl.inv(metric(F))
+
+
+def christoffel(u) -> ufl.core.expr.Expr:
+    """Christoffel symbols Gamma^K_IJ = (F^-1)_Kk dF_kI/dX_J of the convected frame (in-plane).
+
+    Needs a displacement whose gradient is not cell-wise constant (P2 or higher) to be non-zero.
+    """
+    F = ufl.Identity(len(u)) + ufl.grad(u)
+    Finv = ufl.inv(F)
+    dF = ufl.grad(F)
+    K, I, J, k = ufl.indices(4)
+    return ufl.as_tensor(Finv[K, k] * dF[k, I, J], (K, I, J))
+
+
+def christoffel_from_metric(u) -> ufl.core.expr.Expr:
+    """The same symbols from the metric alone: 1/2 C^-1_KL (C_LI,J + C_LJ,I - C_IJ,L)."""
+    F = ufl.Identity(len(u)) + ufl.grad(u)
+    C = metric(F)
+    Cinv = ufl.inv(C)
+    dC = ufl.grad(C)
+    K, I, J, L = ufl.indices(4)
+    return ufl.as_tensor(0.5 * Cinv[K, L] * (dC[L, I, J] + dC[L, J, I] - dC[I, J, L]), (K, I, J))
+
+
+def covariant_velocity_gradient(u, v) -> ufl.core.expr.Expr:
+    """v^I||_J = d v^I/d X^J + Gamma^I_KJ v^K with v^I = (F^-1 v)_I the contravariant components."""
+    F = ufl.Identity(len(u)) + ufl.grad(u)
+    vc = ufl.inv(F) * v
+    G = christoffel(u)
+    I, J, K = ufl.indices(3)
+    return ufl.as_tensor(ufl.grad(vc)[I, J] + G[I, K, J] * vc[K], (I, J))
+
+
+def convected_velocity_gradient(F, grad_v) -> ufl.core.expr.Expr:
+    """The same covariant derivative in closed form: F^-1 Grad v (the Gamma terms cancel)."""
+    return ufl.inv(F) * grad_v
+
+
+def strain_rate(F, grad_v) -> ufl.core.expr.Expr:
+    """Eulerian strain rate d = sym(Grad v F^-1) (push-forward of the convected rate 1/2 dC/dt)."""
+    return ufl.sym(grad_v * ufl.inv(F))
+
+
+# --------------------------------------------------------------------------------------------
+# S-R decomposition
+# --------------------------------------------------------------------------------------------
+def sr_decomposition(H):
+    """Chen's S-R split of F = I + H into a symmetric strain S and a rotation R.
+
+    Returns
+    -------
+    (S, R, c):
+        the strain, the rotation and c = cos(theta) of the mean local rotation angle.
+    """
+    n = H.ufl_shape[0]
+    W = ufl.skew(H)
+    WW = W * W
+    c = ufl.sqrt(1.0 - 0.5 * ufl.inner(W, W))
+    R = ufl.Identity(n) + W + WW / (1.0 + c)
+    S = ufl.sym(H) - WW / (1.0 + c)
+    return S, R, c
+
+
+def increment_gradient(F, F_n):
+    """Gradient of the increment relative to configuration n: dH = Grad(du) F_n^-1 = F F_n^-1 - I."""
+    n = F.ufl_shape[0]
+    return F * ufl.inv(F_n) - ufl.Identity(n)
+
+
+def polar_rotation_2d(F):
+    """Rotation of the polar decomposition of the in-plane block of F (closed form in 2D).
+
+    tan(theta_p) = (F10 - F01)/(F00 + F11); returned embedded in 3x3 with R22 = 1.
+    """
+    a = F[0, 0] + F[1, 1]
+    b = F[1, 0] - F[0, 1]
+    r = ufl.sqrt(a * a + b * b)
+    c, s = a / r, b / r
+    return ufl.as_tensor([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+# --------------------------------------------------------------------------------------------
+# Physical components on the convected base
+# --------------------------------------------------------------------------------------------
+def physical_components(T, F, kind: str = "contravariant"):
+    """Physical components of a Cartesian tensor T on the convected base g_I = F e_I (no sums).
+
+    kind = "contravariant": T<IJ> = T^IJ sqrt(C_II C_JJ), T^IJ = (F^-1 T F^-T)_IJ (components on the
+    unit base vectors g_I/|g_I|); "covariant": T_IJ / sqrt(C_II C_JJ), T_IJ = (F^T T F)_IJ (projections
+    on the unit base vectors); "mixed": T^I_J sqrt(C_II / C_JJ), T^I_J = (F^-1 T F)_IJ.
+    """
+    C = metric(F)
+    n = T.ufl_shape[0]
+    Finv = ufl.inv(F)
+    if kind == "contravariant":
+        comp, scale = Finv * T * Finv.T, lambda i, j: ufl.sqrt(C[i, i] * C[j, j])
+    elif kind == "covariant":
+        comp, scale = F.T * T * F, lambda i, j: 1.0 / ufl.sqrt(C[i, i] * C[j, j])
+    elif kind == "mixed":
+        comp, scale = Finv * T * F, lambda i, j: ufl.sqrt(C[i, i] / C[j, j])
+    else:
+        raise ValueError(f"unknown kind {kind!r}: contravariant, covariant or mixed")
+    return ufl.as_tensor([[comp[i, j] * scale(i, j) for j in range(n)] for i in range(n)])
+
+
+def fibre_stress(sigma, F, A):
+    """Normal stress along the convected fibre a = F A of the reference direction A: a.sigma.a / a.a.
+
+    With A = e_I this is the diagonal covariant physical component; e.g. the fibre stress along the
+    deformed beam axis (A = e_x) or the hoop stress of the ring (A = e_theta of the reference).
+    """
+    a = F * A
+    return ufl.dot(a, sigma * a) / ufl.dot(a, a)

@@ -1,0 +1,340 @@
+"""The finite-element model: spaces, quadrature state, loads, residual and its exact Jacobian.
+
+Equilibrium is written on the reference mesh (the co-moving coordinates) with the nominal stress
+P = J sigma F^-T (theory.md section 2), sigma coming from the stress update of ``updates.py`` and,
+for elastic-plastic materials, the return map of ``materials.py`` at the quadrature points:
+
+    R(u; v) = int P : Grad3 v  w dX  - (external work)  + (boundary terms, e.g. contact) = 0,
+
+w = 2 pi r (axisymmetry) or the thickness b. The Jacobian is exact: the geometric part comes from UFL
+differentiation of P at fixed sigma, the material part from UFL differentiation of the trial stress,
+mapped by the return map's derivative D = d sigma / d sigma_trial (identity for elastic materials,
+where UFL differentiates the update directly).
+
+Loads scale with the load factor t of ``set_load``; follower pressure acts on the current face
+(Nanson: t da = -p J F^-T N dA), dead tractions on the reference face. In plane stress, face loads
+are per unit reference thickness.
+
+Quadrature state (4-vectors xx, yy, zz, xy; see kinematics.py): ``sigma_n`` the converged stress of
+increment n (for the polar update, the unrotated stress), ``sigma`` the stress at the current iterate,
+``p_n``/``p`` the equivalent plastic strain, ``D`` (4x4) the return map's derivative.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from . import materials as mat
+from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
+from .quadrature import QuadratureRule
+from .updates import make_update
+
+
+class InvertedElement(RuntimeError):
+    """det F <= 0 at a quadrature point: the iterate is not admissible."""
+
+
+class ReturnMapFailure(RuntimeError):
+    """The constitutive update could not be evaluated (e.g. S-R split beyond 90 degrees)."""
+
+
+@dataclass
+class Plasticity:
+    """An elastic-plastic material: ``law`` is "j2" (return mapping) or "chen" (Chen's rate law)."""
+
+    hardening: mat.Hardening
+    law: str = "j2"
+
+    def __post_init__(self):
+        if self.law not in ("j2", "chen"):
+            raise ValueError(f"unknown plasticity law {self.law!r}: choose j2 or chen")
+
+
+@dataclass
+class _Ramp:
+    """A value that scales with the load factor: value(t) = t * scale (or a callable of t)."""
+
+    constant: fem.Constant
+    scale: object
+
+    def set(self, t: float) -> None:
+        val = self.scale(t) if callable(self.scale) else np.asarray(self.scale) * t
+        self.constant.value = val
+
+
+@dataclass
+class _Dirichlet:
+    name: str
+    component: int | None
+    ramp: _Ramp | None
+    bc: fem.DirichletBCMetaClass = field(repr=False)
+
+
+class Model:
+    """A 2D body on a Gmsh mesh with named facet tags.
+
+    Parameters
+    ----------
+    meshdata:
+        :class:`geometry.MeshData` (mesh, facet tags and their names).
+    kind:
+        "plane_strain", "plane_stress" or "axisymmetric".
+    elastic:
+        :class:`materials.Elastic`.
+    update:
+        Stress update name (see updates.py); default the S-R update.
+    plasticity:
+        ``None`` for an elastic body, else :class:`Plasticity`.
+    degree:
+        Lagrange degree of the displacement (2 by default; 1 locks in bending).
+    quadrature_degree:
+        Degree of the quadrature rule of the volume integrals (2: three points, exact stiffness of P2
+        small-strain elasticity; axisymmetry needs 3 for the weight r).
+    thickness:
+        Out-of-plane thickness of plane models.
+    """
+
+    def __init__(self, meshdata, kind: str, elastic: mat.Elastic, update: str = "sr",
+                 plasticity: Plasticity | None = None, degree: int = 2,
+                 quadrature_degree: int | None = None, thickness: float = 1.0):
+        self.meshdata = meshdata
+        self.mesh = msh = meshdata.mesh
+        self.comm = msh.comm
+        self.elastic = elastic
+        self.plasticity = plasticity
+        if degree not in (1, 2):
+            raise ValueError(f"degree = {degree}: use 1 or 2")
+        self.degree = degree
+        self.x = ufl.SpatialCoordinate(msh)
+        self.kin = Kinematics(kind, self.x, thickness)
+        if quadrature_degree is None:
+            quadrature_degree = 2 * (degree - 1) + (1 if self.kin.axisymmetric else 0)
+            quadrature_degree = max(quadrature_degree, 1 if degree == 1 else 2)
+        self.rule = QuadratureRule(msh, quadrature_degree)
+        self.update = make_update(update, self.kin, elastic)
+        if plasticity is not None and not self.update.rotates:
+            raise ValueError(f"update {update!r} cannot carry plasticity: use sr or hughes_winget")
+
+        self.V = fem.VectorFunctionSpace(msh, ("CG", degree))
+        self.u = fem.Function(self.V, name="displacement")
+        self.u_n = fem.Function(self.V, name="displacement_n")
+        self.du = fem.Function(self.V, name="newton_correction")
+        self.v = ufl.TestFunction(self.V)
+        self.u_trial = ufl.TrialFunction(self.V)
+
+        r = self.rule
+        self.sigma_n = r.function((4,), "sigma_n")
+        self.sigma = r.function((4,), "sigma")
+        self.p_n = r.function((), "p_n") if plasticity else None
+        self.p = r.function((), "p") if plasticity else None
+        self.D = r.function((4, 4), "D") if plasticity else None
+        self.D_rot = r.function((4, 4), "D_rot") if plasticity and plasticity.law == "chen" else None
+        self.F22_n = self.F22_q = None
+        if plasticity and kind == PLANE_STRESS:
+            self.F22_n = r.function((), "F22_n", 1.0)
+            self.F22_q = r.function((), "F22", 1.0)
+
+        self.ds = ufl.Measure("ds", domain=msh, subdomain_data=meshdata.facet_tags)
+        self._dirichlet: list[_Dirichlet] = []
+        self._ramps: list[_Ramp] = []
+        self._external = []                # UFL integrands (already with ds)
+        self.boundary_terms = []           # objects with residual(model), set_load, commit, restore
+        self.load = 0.0
+        self._compiled = False
+
+    # ----------------------------------------------------------------------------------------
+    # Boundary conditions and loads (before finalize)
+    # ----------------------------------------------------------------------------------------
+    def _facets(self, name: str) -> np.ndarray:
+        ft = self.meshdata.facet_tags
+        return ft.indices[ft.values == self.meshdata.ds_id(name)]
+
+    def fix(self, name: str, component: int | None = None, value=None) -> None:
+        """Dirichlet condition on a tagged boundary: u (or u[component]) = t * value (default 0)."""
+        facets = self._facets(name)
+        fdim = self.mesh.topology.dim - 1
+        if component is None:
+            dofs = fem.locate_dofs_topological(self.V, fdim, facets)
+            c = fem.Constant(self.mesh, PETSc.ScalarType((0.0, 0.0)))
+            bc = fem.dirichletbc(c, dofs, self.V)
+        else:
+            dofs = fem.locate_dofs_topological(self.V.sub(component), fdim, facets)
+            c = fem.Constant(self.mesh, PETSc.ScalarType(0.0))
+            bc = fem.dirichletbc(c, dofs, self.V.sub(component))
+        ramp = None if value is None else _Ramp(c, value)
+        if ramp:
+            self._ramps.append(ramp)
+        self._dirichlet.append(_Dirichlet(name, component, ramp, bc))
+
+    def follower_pressure(self, name: str, magnitude) -> fem.Constant:
+        """Pressure t * magnitude on the current face of a tagged boundary (pushes into the body)."""
+        p = fem.Constant(self.mesh, PETSc.ScalarType(0.0))
+        self._ramps.append(_Ramp(p, magnitude))
+        N = ufl.FacetNormal(self.mesh)
+        N3 = ufl.as_vector([N[0], N[1], 0.0])
+        F = self.update.F(self.u)          # in plane stress: per unit reference thickness
+        cof = ufl.det(F) * ufl.inv(F).T
+        v3 = ufl.as_vector([self.v[0], self.v[1], 0.0])
+        self._external.append(-p * ufl.dot(cof * N3, v3) * self.kin.weight()
+                              * self.ds(self.meshdata.ds_id(name)))
+        return p
+
+    def dead_traction(self, name: str, vector) -> fem.Constant:
+        """Traction t * vector per unit reference area of a tagged boundary (fixed direction)."""
+        T = fem.Constant(self.mesh, PETSc.ScalarType((0.0, 0.0)))
+        self._ramps.append(_Ramp(T, vector))
+        self._external.append(ufl.dot(T, self.v) * self.kin.weight()
+                              * self.ds(self.meshdata.ds_id(name)))
+        return T
+
+    # ----------------------------------------------------------------------------------------
+    # Forms
+    # ----------------------------------------------------------------------------------------
+    @property
+    def bcs(self) -> list:
+        return [d.bc for d in self._dirichlet]
+
+    def thickness_stretch(self, up):
+        """F22 used in P: plane stress closed form (elastic), stored state (plastic), else None."""
+        if self.kin.model != PLANE_STRESS:
+            return None
+        if self.F22_q is not None:
+            return self.F22_q
+        return up.F22
+
+    def finalize(self, jit_params: dict | None = None) -> None:
+        """Build and compile the residual, the Jacobian and the stress evaluation (once)."""
+        u, v, dx = self.u, self.v, self.rule.dx
+        up = self.update.build(u, self.u_n, self.sigma_n)
+        self._update_expr = up
+        F22 = self.thickness_stretch(up)
+        F = self.kin.F3(u, F22) if F22 is not None else self.kin.F3(u)
+        self.F = F
+        J = ufl.det(F)
+        w = self.kin.weight()
+        P = J * to_tensor(self.sigma) * ufl.inv(F).T
+        R = ufl.inner(P, self.kin.grad3(v)) * w * dx
+        for ext in self._external:
+            R = R - ext
+        for term in self.boundary_terms:
+            R = R + term.residual(self)
+        dsig = ufl.derivative(up.sigma, u, self.u_trial)
+        if self.plasticity is not None:
+            dvec = ufl.dot(self.D, to_vec(dsig))
+            if self.D_rot is not None:
+                dvec = dvec + ufl.dot(self.D_rot, to_vec(ufl.derivative(up.sigma_rot, u,
+                                                                        self.u_trial)))
+            dsig = to_tensor(dvec)
+        Jac = ufl.derivative(R, u, self.u_trial) + \
+            ufl.inner(J * dsig * ufl.inv(F).T, self.kin.grad3(v)) * w * dx
+        params = {"jit_params": jit_params or {}}
+        self.residual_form = fem.form(R, **params)
+        self.jacobian_form = fem.form(Jac, **params)
+        # Everything the constitutive stage needs, in one evaluation per iteration
+        parts = [to_vec(up.sigma)]
+        if self.plasticity is not None:
+            parts.append(to_vec(up.sigma_rot))
+        if up.state_new is not None:
+            parts.append(up.state_new)
+        self._n_parts = len(parts)
+        Fu = self.update.F(u)
+        parts.append(ufl.as_vector([ufl.det(Fu)]))
+        self._eval = fem.Expression(ufl.as_vector([c for p in parts for c in p]), self.rule.points)
+        self._state_new = None if up.state_new is None else np.zeros((self.rule.size, 4))
+        self._compiled = True
+        self.set_load(0.0)
+
+    # ----------------------------------------------------------------------------------------
+    # Load factor, constitutive evaluation, commit / restore
+    # ----------------------------------------------------------------------------------------
+    def set_load(self, t: float) -> None:
+        """Set every ramped load, prescribed displacement and moving obstacle to load factor t."""
+        self.load = t
+        for r in self._ramps:
+            r.set(t)
+        for term in self.boundary_terms:
+            term.set_load(t)
+
+    def evaluate_stress(self) -> None:
+        """Stress (and tangent) at every quadrature point for the current displacement iterate.
+
+        Raises :class:`InvertedElement` (on every rank) if det F <= 0 anywhere and
+        :class:`ReturnMapFailure` if the update is not defined (NaN).
+        """
+        vals = self.rule.evaluate(self._eval)
+        detF = vals[:, -1]
+        bad_local = float(np.nanmin(detF)) if detF.size else np.inf
+        if not np.all(np.isfinite(vals)):
+            bad_local = -np.inf
+        bad = self.comm.allreduce(bad_local, op=MPI.MIN)
+        if bad == -np.inf:
+            raise ReturnMapFailure("the stress update returned NaN (increment too large?)")
+        if bad <= 0.0:
+            raise InvertedElement(f"det F = {bad:.3g} <= 0 at a quadrature point")
+        sig_tr = vals[:, 0:4]
+        col = 4
+        sig = self.rule.view(self.sigma)
+        if self.plasticity is None:
+            sig[:] = sig_tr
+        else:
+            sig_rot = vals[:, 4:8]
+            col = 8
+            self._plastic_update(sig_rot, sig_tr)
+        if self._state_new is not None:
+            self._state_new[:] = vals[:, col:col + 4]
+
+    def _plastic_update(self, sig_rot, sig_tr) -> None:
+        plast = self.plasticity
+        kind = self.kin.model
+        p_n = self.p_n.x.array
+        if plast.law == "j2":
+            sig, p, D, deps_p = mat.j2_return(sig_tr, p_n, self.elastic, plast.hardening, kind)
+        else:
+            sig, p, D, D_rot, deps_p = mat.chen_update(sig_rot, sig_tr, p_n, self.elastic,
+                                                       plast.hardening, kind)
+            self.rule.view(self.D_rot)[:] = D_rot
+        self.rule.view(self.sigma)[:] = sig
+        self.p.x.array[:] = p
+        self.rule.view(self.D)[:] = D
+        if self.F22_q is not None:
+            # thickness strain: elastic part by the plane-stress compliance, plastic part incompressible
+            e = self.elastic
+            dsig = sig - sig_rot
+            deps_zz = -e.nu / e.E * (dsig[:, 0] + dsig[:, 1]) + deps_p[:, 2]
+            self.F22_q.x.array[:] = self.F22_n.x.array * np.exp(deps_zz)
+
+    def commit(self) -> None:
+        """Accept the current iterate as the converged state of the increment."""
+        self.u_n.x.array[:] = self.u.x.array
+        if self._state_new is not None:
+            self.rule.view(self.sigma_n)[:] = self._state_new
+        else:
+            self.sigma_n.x.array[:] = self.sigma.x.array
+        if self.plasticity is not None:
+            self.p_n.x.array[:] = self.p.x.array
+            if self.F22_q is not None:
+                self.F22_n.x.array[:] = self.F22_q.x.array
+        for term in self.boundary_terms:
+            term.commit(self)
+
+    def restore(self) -> None:
+        """Return to the last converged state (after a failed increment)."""
+        self.u.x.array[:] = self.u_n.x.array
+        for term in self.boundary_terms:
+            term.restore(self)
+
+    # ----------------------------------------------------------------------------------------
+    # Derived quantities
+    # ----------------------------------------------------------------------------------------
+    def cauchy_stress(self) -> np.ndarray:
+        """Cauchy stress at the points of the current iterate, shape (points, 4)."""
+        return self.rule.view(self.sigma)
+
+    def num_dofs(self) -> int:
+        imap = self.V.dofmap.index_map
+        return imap.size_global * self.V.dofmap.index_map_bs

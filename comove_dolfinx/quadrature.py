@@ -1,0 +1,78 @@
+"""Quadrature spaces: state storage, evaluation of UFL expressions at the points, output averages.
+
+One quadrature degree per model is used for every quadrature element, for the points handed to
+``fem.Expression`` and for the metadata of every ``dx`` touching a quadrature function (dolfinx-0.5.md
+C.5). The quadrature dofmap is the identity, so arrays are laid out cell by cell (local cells, then
+ghosts), then point by point, then component by component.
+"""
+from __future__ import annotations
+
+import basix
+import numpy as np
+import ufl
+from dolfinx import fem
+
+_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral}
+
+
+class QuadratureRule:
+    """The quadrature points of a mesh and the spaces living on them."""
+
+    def __init__(self, mesh, degree: int):
+        self.mesh = mesh
+        self.degree = degree
+        cell = mesh.ufl_cell()
+        self.points, self.weights = basix.make_quadrature(_CELLS[cell.cellname()], degree)
+        imap = mesh.topology.index_map(mesh.topology.dim)
+        self.num_cells_local = imap.size_local
+        self.cells = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
+        self.npts = len(self.weights)
+        self.dx = ufl.dx(domain=mesh, metadata={"quadrature_degree": degree,
+                                                "quadrature_scheme": "default"})
+        self._spaces: dict[tuple, fem.FunctionSpace] = {}
+
+    @property
+    def size(self) -> int:
+        """Number of quadrature points on this rank, ghost cells included."""
+        return len(self.cells) * self.npts
+
+    def space(self, shape: tuple = ()) -> fem.FunctionSpace:
+        """Quadrature space of scalars (), vectors (n,) or tensors (n, m) (cached)."""
+        if shape not in self._spaces:
+            cell = self.mesh.ufl_cell()
+            if shape == ():
+                el = ufl.FiniteElement("Quadrature", cell, self.degree, quad_scheme="default")
+            elif len(shape) == 1:
+                el = ufl.VectorElement("Quadrature", cell, self.degree, dim=shape[0],
+                                       quad_scheme="default")
+            else:
+                el = ufl.TensorElement("Quadrature", cell, self.degree, shape=shape,
+                                       quad_scheme="default")
+            self._spaces[shape] = fem.FunctionSpace(self.mesh, el)
+        return self._spaces[shape]
+
+    def function(self, shape: tuple = (), name: str = "q", value=None) -> fem.Function:
+        """A quadrature function, optionally filled with a constant value (scalar or array of shape)."""
+        f = fem.Function(self.space(shape), name=name)
+        if value is not None:
+            f.x.array[:] = np.tile(np.asarray(value, dtype=float).ravel(), self.size)
+        return f
+
+    def view(self, f: fem.Function) -> np.ndarray:
+        """The values of a quadrature function as an array (points, *shape) sharing its memory."""
+        shape = f.ufl_shape
+        return f.x.array.reshape((self.size,) + tuple(shape))
+
+    def expression(self, expr) -> fem.Expression:
+        """Compile a UFL expression for evaluation at the quadrature points (once per model)."""
+        return fem.Expression(expr, self.points)
+
+    def evaluate(self, expression: fem.Expression) -> np.ndarray:
+        """Values at every point of every local and ghost cell, shape (points, value_size)."""
+        vals = expression.eval(self.cells)
+        return vals.reshape(self.size, -1)
+
+    def cell_average(self, values: np.ndarray) -> np.ndarray:
+        """Quadrature-weighted cell averages of per-point values (points, ...) -> (cells, ...)."""
+        v = values.reshape((len(self.cells), self.npts) + values.shape[1:])
+        return np.tensordot(self.weights / self.weights.sum(), v, axes=([0], [1]))

@@ -1,0 +1,244 @@
+"""Newton iterations and the increment loop with automatic cut-back.
+
+Newton works on the total displacement u. Each iteration evaluates the stress update (and return
+map) at the quadrature points, assembles the residual and the exact Jacobian and solves with MUMPS;
+the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic analysis is done once.
+
+Convergence: ||R|| <= rtol * R_scale + atol, with R_scale the largest initial residual norm of the
+increments so far (a force scale of the run), or a Newton correction ||du|| <= stol * ||u|| (the
+residual of a stiff body stalls at a round-off floor set by its internal forces, which can exceed
+rtol * R_scale when the load increments are small). A Newton correction that leads to an inadmissible
+iterate (det F <= 0, or an increment the S-R split cannot represent) is halved up to ``backtracks``
+times. An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
+``divergence`` over the increment's first fails the increment; the loop
+then restores the last converged state and halves the increment, up to ``max_cutbacks`` times in a
+row, then stops cleanly (every converged increment has already been handed to the callbacks).
+After ``grow_after`` easy increments (at most ``easy_its`` iterations) the increment doubles again,
+never beyond its nominal size, so the run comes back onto the nominal load levels.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from collections import defaultdict
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+from .model import InvertedElement, Model, ReturnMapFailure
+
+log = logging.getLogger("comove")
+
+
+class Timer:
+    """Wall-time accumulated per category (assembly, solve, stress update, output, ...)."""
+
+    def __init__(self):
+        self.totals: dict[str, float] = defaultdict(float)
+
+    @contextmanager
+    def __call__(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.totals[name] += time.perf_counter() - t0
+
+    def report(self) -> str:
+        total = sum(self.totals.values())
+        parts = [f"{k} {v:.2f} s ({100 * v / total:.0f} %)" for k, v in
+                 sorted(self.totals.items(), key=lambda kv: -kv[1])] if total else []
+        return "timing: " + ", ".join(parts)
+
+
+@dataclass
+class NewtonSettings:
+    rtol: float = 1e-8
+    atol: float = 1e-12
+    stol: float = 1e-10
+    max_it: int = 25
+    divergence: float = 1e6
+    backtracks: int = 4
+
+
+class Newton:
+    """Newton-Raphson on ``model.u`` with an exact Jacobian and a direct solver (MUMPS)."""
+
+    def __init__(self, model: Model, settings: NewtonSettings | None = None,
+                 timer: Timer | None = None):
+        self.model = model
+        self.settings = settings or NewtonSettings()
+        self.timer = timer or Timer()
+        self.A = fem_petsc.create_matrix(model.jacobian_form)
+        self.b = fem_petsc.create_vector(model.residual_form)
+        self.ksp = PETSc.KSP().create(model.comm)
+        self.ksp.setOperators(self.A)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType("mumps")
+        self.residual_scale = 0.0
+        self.history: list[tuple[float, float]] = []
+
+    def residual(self) -> float:
+        """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm."""
+        m, b = self.model, self.b
+        with self.timer("stress update"):
+            m.evaluate_stress()
+        with self.timer("assembly"):
+            with b.localForm() as bl:
+                bl.set(0.0)
+            fem_petsc.assemble_vector(b, m.residual_form)
+            fem_petsc.apply_lifting(b, [m.jacobian_form], bcs=[m.bcs], x0=[m.u.vector], scale=-1.0)
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            fem_petsc.set_bc(b, m.bcs, m.u.vector, -1.0)
+            b.scale(-1.0)
+        return b.norm()
+
+    def solve(self) -> tuple[bool, int, str]:
+        """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""
+        m, s = self.model, self.settings
+        self.history = []
+        try:
+            r0 = rnorm = self.residual()
+        except (InvertedElement, ReturnMapFailure) as err:
+            return False, 0, str(err)
+        self.residual_scale = max(self.residual_scale, r0)
+        for it in range(1, s.max_it + 1):
+            if rnorm <= s.rtol * self.residual_scale + s.atol:
+                return True, it - 1, "converged"
+            with self.timer("assembly"):
+                self.A.zeroEntries()
+                fem_petsc.assemble_matrix(self.A, m.jacobian_form, bcs=m.bcs)
+                self.A.assemble()
+            with self.timer("solve"):
+                self.ksp.solve(self.b, m.du.vector)
+                m.du.x.scatter_forward()
+            dnorm = m.du.vector.norm()
+            alpha, err = 1.0, None
+            for _ in range(s.backtracks + 1):
+                m.u.x.array[:] += alpha * m.du.x.array
+                try:
+                    rnorm = self.residual()
+                    err = None
+                    break
+                except (InvertedElement, ReturnMapFailure) as e:
+                    err = e
+                    m.u.x.array[:] -= alpha * m.du.x.array
+                    alpha *= 0.5
+            if err is not None:
+                return False, it, str(err)
+            if alpha < 1.0:
+                log.info("    Newton %2d: step scaled by %g to stay admissible", it, alpha)
+            self.history.append((rnorm, dnorm))
+            log.info("    Newton %2d: |R| = %.3e (rel %.1e), |du| = %.3e", it, rnorm,
+                     rnorm / max(self.residual_scale, 1e-300), dnorm)
+            if not np.isfinite(rnorm) or rnorm > s.divergence * max(r0, s.atol):
+                return False, it, f"diverged (|R| = {rnorm:.3e})"
+            if dnorm <= s.stol * m.u.vector.norm():
+                return True, it, "converged"
+        converged = rnorm <= s.rtol * self.residual_scale + s.atol
+        return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
+
+
+@dataclass
+class StepSettings:
+    """Increment control: nominal number of equal increments over the load range, cut-back, growth."""
+
+    n_steps: int = 20
+    t_end: float = 1.0
+    max_cutbacks: int = 6
+    easy_its: int = 4
+    grow_after: int = 2
+    predictor: bool = False        # secant extrapolation; hurts thin rotating bodies (axial stretch)
+
+
+@dataclass
+class Increment:
+    """What a converged increment reports to the callbacks."""
+
+    step: int
+    load: float
+    newton_its: int
+    wall_s: float
+    cutbacks: int = 0
+
+
+@dataclass
+class RunResult:
+    increments: list[Increment] = field(default_factory=list)
+    completed: bool = False
+    message: str = ""
+
+    @property
+    def newton_its(self) -> list[int]:
+        return [inc.newton_its for inc in self.increments]
+
+
+class IncrementalSolver:
+    """Load factor t from 0 to t_end in increments, each solved by Newton, with cut-back."""
+
+    def __init__(self, model: Model, steps: StepSettings | None = None,
+                 newton: NewtonSettings | None = None, timer: Timer | None = None):
+        self.model = model
+        self.steps = steps or StepSettings()
+        if self.steps.n_steps < 1:
+            raise ValueError(f"n_steps = {self.steps.n_steps}: need at least one increment")
+        self.timer = timer or Timer()
+        self.newton = Newton(model, newton, self.timer)
+
+    def run(self, callbacks=(), progress=None) -> RunResult:
+        """Run the increments; each callback(model, increment) is called after every converged one.
+
+        ``progress``: optional object with ``update(dt)`` and ``set_postfix_str(text)`` (tqdm).
+        """
+        m, st = self.model, self.steps
+        dt_nom = st.t_end / st.n_steps
+        dt, t, step, cut, easy = dt_nom, 0.0, 0, 0, 0
+        u_prev = m.u.x.array.copy()
+        dt_prev = None
+        result = RunResult()
+        tol = 1e-12 * st.t_end
+        while t < st.t_end - tol:
+            dt = min(dt, st.t_end - t)
+            t_try = t + dt
+            m.set_load(t_try)
+            if st.predictor and dt_prev:
+                m.u.x.array[:] = m.u_n.x.array + (dt / dt_prev) * (m.u_n.x.array - u_prev)
+            t0 = time.perf_counter()
+            ok, its, reason = self.newton.solve()
+            if not ok:
+                m.restore()
+                cut += 1
+                log.info("  increment to t = %.6g failed (%s)", t_try, reason)
+                if cut > st.max_cutbacks:
+                    m.set_load(t)
+                    result.message = (f"stopped at load factor {t:.6g} after {cut - 1} cut-backs: "
+                                      f"{reason}")
+                    return result
+                dt *= 0.5
+                easy = 0
+                continue
+            u_prev[:] = m.u_n.x.array
+            m.commit()
+            dt_prev, t, step = dt, t_try, step + 1
+            inc = Increment(step, t, its, time.perf_counter() - t0, cut)
+            result.increments.append(inc)
+            cut = 0
+            with self.timer("output"):
+                for cb in callbacks:
+                    cb(m, inc)
+            if progress is not None:
+                progress.update(dt)
+            easy = easy + 1 if its <= st.easy_its else 0
+            # grow back towards the nominal increment, staying on the grid of the doubled step
+            if easy >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
+                dt = min(2 * dt, dt_nom)
+                easy = 0
+        result.completed = True
+        result.message = f"completed {step} increments"
+        return result

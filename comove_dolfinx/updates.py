@@ -1,0 +1,198 @@
+"""Stress updates by name, written in UFL as functions of the current displacement.
+
+Every update returns the Cauchy stress at the end of the increment n -> n+1 as a UFL expression of
+the displacement u (the "trial" stress, before any plastic correction), given the stored state of
+increment n. The model evaluates it at the quadrature points, applies the material's return map if
+there is one, and differentiates it with UFL for an exact Jacobian.
+
+Names (theory.md section 3):
+
+``sr``            (default) incremental S-R update: dH = F F_n^-1 - I, Chen's split dH -> (dS, dR),
+                  sigma = dR sigma_n dR^T + C:dS. Objective for rigid increments; converges to the
+                  Jaumann rate as the increments shrink.
+``hughes_winget`` mid-step dH = (F - F_n) F_mid^-1, dR = (I - dW/2)^-1 (I + dW/2),
+                  sigma = dR sigma_n dR^T + C:sym(dH) (Jaumann integrator).
+``polar``         Green-Naghdi: the unrotated stress s^ = R^T sigma R (polar R of F) is stored and
+                  advanced by C:(R_mid^T sym(dH) R_mid); sigma = R s^ R^T.
+``svk``           total-Lagrangian St Venant-Kirchhoff: S = lambda tr(E) I + 2 mu E, sigma = F S F^T / J.
+``neo_hooke``     total-Lagrangian compressible neo-Hookean: sigma = (mu (b - I) + lambda ln J I) / J.
+
+Plane stress: the hypoelastic updates use the reduced Lame constant on the in-plane increment, so
+sigma_zz = 0 identically; their thickness stretch is the exact integral of the elastic rate law,
+d_zz = -lambda/(lambda + 2 mu) tr(d_plane)  =>  F_zz = J_plane^(-lambda/(lambda + 2 mu)).
+The hyperelastic laws solve S_zz = 0 for F_zz (in closed form for St Venant-Kirchhoff, by a few unrolled
+Newton steps, converged to round-off, for neo-Hookean).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import ufl
+
+from .kinematics import (AXISYMMETRIC, PLANE_STRESS, Kinematics, embed, increment_gradient,
+                         polar_rotation_2d, sr_decomposition, to_tensor, to_vec)
+from .materials import Elastic
+
+
+@dataclass
+class UpdateExpr:
+    """UFL expressions produced by an update for the increment n -> n+1."""
+
+    sigma: object                 # 3x3 Cauchy stress (elastic trial stress for plastic materials)
+    sigma_rot: object = None      # the old stress carried to n+1 by the update's rotation
+    state_new: object = None      # 4-vector to store as the update's own state, if not sigma itself
+    F22: object = None            # thickness stretch in plane stress, when the update fixes it
+
+
+def hooke(dE, elastic: Elastic, model: str):
+    """Isotropic elastic law C:dE on a 3x3 tensor; plane stress uses the reduced lambda, zz -> 0."""
+    if model == PLANE_STRESS:
+        e2 = ufl.as_tensor([[dE[0, 0], dE[0, 1]], [dE[1, 0], dE[1, 1]]])
+        s2 = elastic.lmbda_plane_stress * ufl.tr(e2) * ufl.Identity(2) + 2.0 * elastic.mu * e2
+        return embed(s2, 0)
+    return elastic.lmbda * ufl.tr(dE) * ufl.Identity(3) + 2.0 * elastic.mu * dE
+
+
+class StressUpdate:
+    """Base class: ``build`` returns the UpdateExpr of an increment."""
+
+    name = ""
+    incremental = True            # uses the stored stress of increment n
+    rotates = True                # has a rotated old stress (can carry plasticity)
+
+    def __init__(self, kin: Kinematics, elastic: Elastic):
+        self.kin = kin
+        self.elastic = elastic
+
+    def F(self, u):
+        """Deformation gradient seen by the update (in plane stress the in-plane block suffices)."""
+        return self.kin.F3(u, F22=1.0) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+
+    def thickness_stretch(self, u):
+        """Plane stress: exact thickness stretch of the hypoelastic law, J_plane^(-l/(l+2m))."""
+        if self.kin.model != PLANE_STRESS:
+            return None
+        e = self.elastic
+        J2 = ufl.det(ufl.Identity(2) + ufl.grad(u))
+        return J2 ** (-e.lmbda / (e.lmbda + 2.0 * e.mu))
+
+    def build(self, u, u_n, state_n) -> UpdateExpr:  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+class SRUpdate(StressUpdate):
+    """Incremental S-R update (theory.md 3.3), the project's default."""
+
+    name = "sr"
+
+    def build(self, u, u_n, state_n):
+        dH = increment_gradient(self.F(u), self.F(u_n))
+        dS, dR, _ = sr_decomposition(dH)
+        sig_rot = dR * to_tensor(state_n) * dR.T
+        sig = sig_rot + hooke(dS, self.elastic, self.kin.model)
+        return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
+
+
+def _mid_step(F, F_n):
+    """Gradient of the increment with respect to the mid-step configuration."""
+    F_mid = 0.5 * (F + F_n)
+    return (F - F_n) * ufl.inv(F_mid), F_mid
+
+
+class HughesWingetUpdate(StressUpdate):
+    """Hughes-Winget (1980) incrementally objective Jaumann integrator."""
+
+    name = "hughes_winget"
+
+    def build(self, u, u_n, state_n):
+        dH, _ = _mid_step(self.F(u), self.F(u_n))
+        dW = ufl.skew(dH)
+        Id = ufl.Identity(3)
+        dR = ufl.inv(Id - 0.5 * dW) * (Id + 0.5 * dW)
+        sig_rot = dR * to_tensor(state_n) * dR.T
+        sig = sig_rot + hooke(ufl.sym(dH), self.elastic, self.kin.model)
+        return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
+
+
+class PolarUpdate(StressUpdate):
+    """Green-Naghdi rate through the polar rotation (Flanagan & Taylor 1987); stores s^ = R^T sigma R."""
+
+    name = "polar"
+    rotates = False
+
+    def build(self, u, u_n, state_n):
+        F, F_n = self.F(u), self.F(u_n)
+        dH, F_mid = _mid_step(F, F_n)
+        R_mid = polar_rotation_2d(F_mid)
+        de_hat = R_mid.T * ufl.sym(dH) * R_mid
+        s_hat = to_tensor(state_n) + hooke(de_hat, self.elastic, self.kin.model)
+        R = polar_rotation_2d(F)
+        return UpdateExpr(R * s_hat * R.T, state_new=to_vec(s_hat), F22=self.thickness_stretch(u))
+
+
+class SVKUpdate(StressUpdate):
+    """Total-Lagrangian St Venant-Kirchhoff hyperelasticity."""
+
+    name = "svk"
+    incremental = False
+    rotates = False
+
+    def build(self, u, u_n, state_n):
+        e = self.elastic
+        F22 = None
+        if self.kin.model == PLANE_STRESS:
+            F2 = ufl.Identity(2) + ufl.grad(u)
+            E2 = 0.5 * (F2.T * F2 - ufl.Identity(2))
+            F22 = ufl.sqrt(1.0 - 2.0 * e.lmbda / (e.lmbda + 2.0 * e.mu) * ufl.tr(E2))
+            F = embed(F2, F22)
+        else:
+            F = self.kin.F3(u)
+        E = 0.5 * (F.T * F - ufl.Identity(3))
+        S = e.lmbda * ufl.tr(E) * ufl.Identity(3) + 2.0 * e.mu * E
+        return UpdateExpr(F * S * F.T / ufl.det(F), F22=F22)
+
+
+class NeoHookeUpdate(StressUpdate):
+    """Total-Lagrangian compressible neo-Hookean: psi = mu/2 (I1 - 3) - mu ln J + lambda/2 (ln J)^2."""
+
+    name = "neo_hooke"
+    incremental = False
+    rotates = False
+    newton_steps = 4
+
+    def build(self, u, u_n, state_n):
+        e = self.elastic
+        F22 = None
+        if self.kin.model == PLANE_STRESS:
+            # sigma_zz = 0: mu (F22^2 - 1) + lambda ln(J2 F22) = 0, solved for z = ln F22 from the
+            # linearised guess; Newton converges quadratically (4 steps: round-off for |z| < 0.3).
+            J2 = ufl.det(ufl.Identity(2) + ufl.grad(u))
+            lnJ2 = ufl.ln(J2)
+            z = -e.lmbda / (e.lmbda + 2.0 * e.mu) * lnJ2
+            for _ in range(self.newton_steps):
+                ez = ufl.exp(2.0 * z)
+                z = z - (e.mu * (ez - 1.0) + e.lmbda * (lnJ2 + z)) / (2.0 * e.mu * ez + e.lmbda)
+            F22 = ufl.exp(z)
+            F = embed(ufl.Identity(2) + ufl.grad(u), F22)
+        else:
+            F = self.kin.F3(u)
+        J = ufl.det(F)
+        b = F * F.T
+        sig = (e.mu * (b - ufl.Identity(3)) + e.lmbda * ufl.ln(J) * ufl.Identity(3)) / J
+        return UpdateExpr(sig, F22=F22)
+
+
+UPDATES = {cls.name: cls for cls in (SRUpdate, HughesWingetUpdate, PolarUpdate, SVKUpdate,
+                                     NeoHookeUpdate)}
+
+
+def make_update(name: str, kin: Kinematics, elastic: Elastic) -> StressUpdate:
+    """The update called ``name`` (ValueError listing the known names otherwise)."""
+    try:
+        return UPDATES[name](kin, elastic)
+    except KeyError:
+        raise ValueError(f"unknown stress update {name!r}: choose one of "
+                         f"{', '.join(UPDATES)}") from None
+
+
+__all__ = ["UPDATES", "UpdateExpr", "StressUpdate", "make_update", "hooke", "AXISYMMETRIC"]
