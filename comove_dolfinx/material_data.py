@@ -1,0 +1,244 @@
+"""Material data and the tensor storage shared by the material laws of :mod:`comove_dolfinx.materials`.
+
+Stored tensors are arrays (N, 4) of the components (xx, yy, zz, xy): zz is out of plane (the hoop component
+in axisymmetry) and the shear is the tensor component, so a:b = a_xx b_xx + a_yy b_yy + a_zz b_zz + 2 a_xy b_xy
+(see :mod:`comove_dolfinx.materials` for the full convention). Stresses are in the units of E, tension
+positive; plastic strains are equivalent (von Mises) plastic strains. Pure NumPy, vectorised over points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+MODELS = ("plane_strain", "axisymmetric", "plane_stress")
+
+ONE = np.array([1.0, 1.0, 1.0, 0.0])      # the identity tensor as a 4-vector
+WEIGHT = np.array([1.0, 1.0, 1.0, 2.0])   # a:b = sum(WEIGHT * a * b)
+PDEV = np.eye(4) - np.outer(ONE, ONE) / 3.0   # deviatoric projector, d dev(a)_i / d a_j
+
+
+class MaterialError(ValueError):
+    """Invalid material data; the message names the bad value and how to fix it."""
+
+
+def check_model(model: str) -> str:
+    """Return ``model`` if it is one of :data:`MODELS`, else raise :class:`MaterialError`."""
+    if model not in MODELS:
+        raise MaterialError(f"model = {model!r} is not one of {', '.join(MODELS)}")
+    return model
+
+
+def as_points(a: ArrayLike, name: str) -> np.ndarray:
+    """Copy ``a`` to a float array of shape (N, 4), raising ``ValueError`` for any other shape."""
+    a = np.array(a, dtype=float, ndmin=2)
+    if a.ndim != 2 or a.shape[1] != 4:
+        raise ValueError(f"{name} has shape {a.shape}; expected (N, 4) = (xx, yy, zz, xy) per point")
+    return a
+
+
+def check_plane_stress(sig: np.ndarray, name: str) -> None:
+    """Raise :class:`MaterialError` if the zz column of a plane-stress state is not (close to) zero."""
+    scale = np.abs(sig).max(initial=0.0)
+    bad = np.abs(sig[:, 2]) > 1e-10 * scale
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise MaterialError(f"plane_stress needs {name}[:, 2] (sigma_zz) = 0, found {sig[i, 2]!r} at point "
+                            f"{i}: build the predictor with Elastic.stiffness('plane_stress')")
+
+
+def ddot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Double contraction a:b of stored tensors, shape (N,)."""
+    return np.einsum("ni,ni->n", a * WEIGHT, b)
+
+
+def deviator(sig: ArrayLike) -> np.ndarray:
+    """Deviatoric part of stored tensors (N, 4); zz takes part in the trace."""
+    sig = np.asarray(sig, dtype=float)
+    return sig - (sig[..., :3].sum(axis=-1) / 3.0)[..., None] * ONE
+
+
+def von_mises(sig: ArrayLike) -> np.ndarray:
+    """Von Mises equivalent stress sqrt(3/2 s:s) of stored stresses (N, 4)."""
+    s = deviator(sig)
+    return np.sqrt(1.5 * np.sum(WEIGHT * s * s, axis=-1))
+
+
+@dataclass(frozen=True)
+class Elastic:
+    """Isotropic linear elasticity.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus, > 0.
+    nu : float
+        Poisson's ratio, -1 < nu < 0.5.
+    """
+
+    E: float
+    nu: float
+
+    def __post_init__(self) -> None:
+        E, nu = float(self.E), float(self.nu)
+        if not np.isfinite(E) or E <= 0.0:
+            raise MaterialError(f"E = {self.E!r} must be a finite number > 0 (Young's modulus)")
+        if not np.isfinite(nu):
+            raise MaterialError(f"nu = {self.nu!r} must be a finite number in (-1, 0.5)")
+        if nu >= 0.5:
+            raise MaterialError(f"nu = {self.nu!r} must be < 0.5 (incompressible is not supported; "
+                                "use e.g. 0.499)")
+        if nu <= -1.0:
+            raise MaterialError(f"nu = {self.nu!r} must be > -1 (the bulk modulus would not be positive)")
+        object.__setattr__(self, "E", E)
+        object.__setattr__(self, "nu", nu)
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus G = E / (2 (1 + nu))."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def lmbda(self) -> float:
+        """Lame's first parameter E nu / ((1 + nu)(1 - 2 nu))."""
+        return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+
+    @property
+    def kappa(self) -> float:
+        """Bulk modulus E / (3 (1 - 2 nu))."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    @property
+    def lmbda_plane_stress(self) -> float:
+        """Lame's first parameter of plane stress, 2 lmbda mu / (lmbda + 2 mu) = E nu / (1 - nu^2)."""
+        return 2.0 * self.lmbda * self.mu / (self.lmbda + 2.0 * self.mu)
+
+    def stiffness(self, model: str) -> np.ndarray:
+        """Elastic stiffness (4, 4), d sigma / d eps in the storage convention.
+
+        For "plane_stress" the zz row and column are zero and the in-plane block is the plane-stress
+        stiffness C_ps; otherwise it is the 3D stiffness restricted to the four components.
+        """
+        if check_model(model) == "plane_stress":
+            one = np.array([1.0, 1.0, 0.0, 0.0])
+            return self.lmbda_plane_stress * np.outer(one, one) + 2.0 * self.mu * np.diag([1.0, 1.0, 0.0, 1.0])
+        return self.lmbda * np.outer(ONE, ONE) + 2.0 * self.mu * np.eye(4)
+
+    def compliance(self) -> np.ndarray:
+        """3D compliance (4, 4), d eps / d sigma; for a plane-stress state (sigma_zz = 0) it also gives eps_zz."""
+        return (1.0 + self.nu) / self.E * np.eye(4) - self.nu / self.E * np.outer(ONE, ONE)
+
+
+@dataclass(frozen=True)
+class Hardening:
+    """Isotropic hardening: yield stress against equivalent plastic strain, piecewise linear.
+
+    Parameters
+    ----------
+    strain : tuple of float
+        Equivalent plastic strains p_k; strain[0] = 0, strictly increasing.
+    stress : tuple of float
+        Yield stresses sigma_k > 0 at p_k, non-decreasing (no softening).
+    tail_slope : float, optional
+        Slope d sigma_y / dp beyond the last point, >= 0; the default 0 keeps the curve flat there.
+    """
+
+    strain: tuple[float, ...]
+    stress: tuple[float, ...]
+    tail_slope: float = 0.0
+
+    def __post_init__(self) -> None:
+        p = tuple(float(v) for v in np.atleast_1d(self.strain))
+        s = tuple(float(v) for v in np.atleast_1d(self.stress))
+        if len(p) != len(s):
+            raise MaterialError(f"the hardening table has {len(p)} strains but {len(s)} stresses: "
+                                "give one yield stress per plastic strain")
+        if len(p) == 0:
+            raise MaterialError("the hardening table is empty: give at least the initial yield stress at strain 0")
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(s)) and np.isfinite(self.tail_slope)):
+            raise MaterialError(f"the hardening table must hold finite numbers: strain = {p}, stress = {s}")
+        if p[0] != 0.0:
+            raise MaterialError(f"strain[0] = {p[0]!r} must be 0: the table starts at the initial yield stress")
+        for k in range(len(p)):
+            if s[k] <= 0.0:
+                raise MaterialError(f"stress[{k}] = {s[k]!r} must be > 0 (a yield stress)")
+            if k and p[k] <= p[k - 1]:
+                raise MaterialError(f"row {k}: strain[{k}] = {p[k]!r} is not greater than strain[{k - 1}] = "
+                                    f"{p[k - 1]!r}; the plastic strains must increase strictly")
+            if k and s[k] < s[k - 1]:
+                raise MaterialError(f"row {k}: stress[{k}] = {s[k]!r} is less than stress[{k - 1}] = "
+                                    f"{s[k - 1]!r}; softening is not supported: make the stresses non-decreasing")
+        if self.tail_slope < 0.0:
+            raise MaterialError(f"tail_slope = {self.tail_slope!r} must be >= 0 (softening is not supported)")
+        object.__setattr__(self, "strain", p)
+        object.__setattr__(self, "stress", s)
+        object.__setattr__(self, "tail_slope", float(self.tail_slope))
+        # arrays for the vectorised functions; segment k starts at strain[k] and has slope _h[k]
+        for name, arr in (("_p", np.array(p)), ("_s", np.array(s)),
+                          ("_h", np.append(np.diff(s) / np.diff(p), float(self.tail_slope)))):
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
+
+    @classmethod
+    def linear(cls, sigma0: float, H: float) -> "Hardening":
+        """Linear hardening sigma_y = sigma0 + H p without end."""
+        return cls((0.0,), (sigma0,), tail_slope=H)
+
+    @classmethod
+    def perfect(cls, sigma0: float) -> "Hardening":
+        """Perfect plasticity, sigma_y = sigma0."""
+        return cls((0.0,), (sigma0,))
+
+    @property
+    def segments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Start strains, start stresses and slopes of the segments (the last one runs to infinity)."""
+        return self._p, self._s, self._h
+
+    def sigma_y(self, p: ArrayLike) -> np.ndarray:
+        """Yield stress at equivalent plastic strain p (vectorised)."""
+        p = np.asarray(p, dtype=float)
+        return np.interp(p, self._p, self._s) + self.tail_slope * np.maximum(p - self._p[-1], 0.0)
+
+    def slope(self, p: ArrayLike) -> np.ndarray:
+        """Slope d sigma_y / dp of the segment holding p, right-continuous at the points (vectorised)."""
+        k = np.searchsorted(self._p, np.asarray(p, dtype=float), side="right") - 1
+        return self._h[np.clip(k, 0, len(self._h) - 1)]
+
+    def solve_dp(self, seq_tr: ArrayLike, p_n: ArrayLike, three_mu: float) -> tuple[np.ndarray, np.ndarray]:
+        """Exact root dp of seq_tr - three_mu dp - sigma_y(p_n + dp) = 0 (theory 4.2).
+
+        The residual is piecewise linear and strictly decreasing in dp, so the root is found by scanning the
+        segments. A root exactly on a table point belongs to the segment that starts there.
+
+        Parameters
+        ----------
+        seq_tr : array_like
+            Trial equivalent stresses; only seq_tr > sigma_y(p_n) is meaningful (else dp <= 0 comes back).
+        p_n : array_like
+            Equivalent plastic strains at the start of the increment.
+        three_mu : float
+            Three times the shear modulus.
+
+        Returns
+        -------
+        dp, H_active : ndarray
+            The increment and the slope of the segment holding p_n + dp.
+        """
+        seq, pn = np.broadcast_arrays(np.asarray(seq_tr, dtype=float), np.asarray(p_n, dtype=float))
+        dp = np.zeros(seq.shape)
+        h_act = np.zeros(seq.shape)
+        todo = np.ones(seq.shape, dtype=bool)
+        last = len(self._p) - 1
+        for k, (p0, s0, h) in enumerate(zip(self._p, self._s, self._h)):
+            here = todo.copy()
+            if k < last:   # the root lies in this segment if the residual is negative at its end
+                p1 = self._p[k + 1]
+                here &= (pn < p1) & (seq - three_mu * (p1 - pn) - self._s[k + 1] < 0.0)
+            start = np.maximum(p0, pn)
+            g = seq - three_mu * (start - pn) - (s0 + h * (start - p0))
+            dp = np.where(here, start - pn + g / (three_mu + h), dp)
+            h_act = np.where(here, h, h_act)
+            todo &= ~here
+        return dp, h_act

@@ -1,0 +1,289 @@
+"""Material laws at quadrature points: J2 return mapping and Chen Zhi-da's single-parameter law.
+
+Storage convention
+------------------
+Stresses and strains are arrays of shape (N, 4): for each of N quadrature points the Cartesian components
+(xx, yy, zz, xy) of the symmetric tensor. "zz" is the out-of-plane component; in axisymmetry (x = r, y = z)
+it is the hoop component theta-theta. The shear is stored once, as the tensor component (eps_xy, not the
+engineering strain 2 eps_xy). The double contraction of two stored tensors is therefore
+a:b = a_xx b_xx + a_yy b_yy + a_zz b_zz + 2 a_xy b_xy.
+
+Tangents D of shape (N, 4, 4) hold D[:, i, j] = d out_i / d in_j in the same convention: a perturbation of
+in_xy changes the tensor components xy and yx together. In this convention D need not be a symmetric matrix.
+
+Models: "plane_strain" and "axisymmetric" apply the three-dimensional law to the four components;
+"plane_stress" keeps sigma_zz = 0 exactly, and the zz rows and columns of its tangents are zero.
+
+Units: stresses in the units of E; strains are dimensionless; tension is positive. p is the equivalent
+(von Mises) plastic strain, with sigma_eq dp = sigma : deps_p. Pure NumPy, vectorised over the points; the
+material data (:class:`Elastic`, :class:`Hardening`) live in :mod:`comove_dolfinx.material_data` and are
+re-exported here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .material_data import (MODELS, ONE, PDEV, WEIGHT, Elastic, Hardening, MaterialError, as_points,
+                            check_model, check_plane_stress, ddot, deviator, von_mises)
+
+__all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_update", "deviator", "j2_return",
+           "von_mises"]
+
+
+def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
+              model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Von Mises return mapping with isotropic hardening (backward Euler, theory 4.1-4.3).
+
+    Parameters
+    ----------
+    sig_tr : array_like, (N, 4)
+        Trial (elastic predictor) stress; for "plane_stress" its zz column must be 0 (predictor with C_ps).
+    p_n : array_like, (N,)
+        Equivalent plastic strain at the start of the increment.
+    elastic, hardening
+        Material data.
+    model : str
+        "plane_strain", "axisymmetric" (radial return on the four components) or "plane_stress"
+        (Simo-Taylor return with sigma_zz = 0, generalised to the piecewise-linear table).
+
+    Returns
+    -------
+    sig : (N, 4)
+        Stress at the end of the increment.
+    p : (N,)
+        Equivalent plastic strain.
+    D : (N, 4, 4)
+        d sig / d sig_tr of the discrete map (identity at elastic points; zz row and column zero in plane
+        stress). The tangent d sig / d eps is D times the elastic stiffness of the model.
+    deps_p : (N, 4)
+        Plastic strain increment (tensor components; deps_p zz = -(xx + yy)).
+    """
+    check_model(model)
+    sig_tr = as_points(sig_tr, "sig_tr")
+    p_n = np.broadcast_to(np.asarray(p_n, dtype=float), sig_tr.shape[:1]).copy()
+    if model == "plane_stress":
+        check_plane_stress(sig_tr, "sig_tr")
+        return _j2_plane_stress(sig_tr, p_n, elastic, hardening)
+    s = deviator(sig_tr)
+    q = np.sqrt(1.5 * ddot(s, s))
+    sig, p, deps_p = sig_tr.copy(), p_n.copy(), np.zeros_like(sig_tr)
+    D = np.tile(np.eye(4), (len(p), 1, 1))
+    i = np.flatnonzero(q > hardening.sigma_y(p_n))
+    if i.size:
+        three_mu = 3.0 * elastic.mu
+        q_i = q[i]
+        dp, h = hardening.solve_dp(q_i, p_n[i], three_mu)
+        n = s[i] / q_i[:, None]
+        ratio = dp / q_i
+        sig[i] -= (three_mu * dp)[:, None] * n
+        p[i] += dp
+        deps_p[i] = 1.5 * dp[:, None] * n
+        theta = 1.0 - three_mu * ratio
+        c = 1.5 * three_mu * (1.0 / (three_mu + h) - ratio)
+        D[i] = (np.outer(ONE, ONE) / 3.0 + theta[:, None, None] * PDEV
+                - c[:, None, None] * n[:, :, None] * (WEIGHT * n)[:, None, :])
+    return sig, p, D, deps_p
+
+
+def _plane_stress_segment(A, B, pn, c1, c2, hardening):
+    """Index of the hardening segment that holds the plane-stress solution (closed-form test per point).
+
+    The root lies beyond a table point (p_k, sigma_k) with p_k > p_n exactly when the equivalent stress at
+    dgamma = 1.5 (p_k - p_n) / sigma_k is >= sigma_k: both sigma_eq(dgamma) (decreasing) and
+    p(dgamma) = p_n + 2/3 dgamma sigma_eq(dgamma) (increasing) are monotone.
+    """
+    p0, s0, _ = hardening.segments
+    seg = np.zeros(len(pn), dtype=int)
+    for pk, sk in zip(p0[1:], s0[1:]):
+        g = 1.5 * np.maximum(pk - pn, 0.0) / sk
+        seq = np.sqrt(A / (1.0 + c1 * g) ** 2 + B / (1.0 + c2 * g) ** 2)
+        seg += (pk <= pn) | (seq >= sk)
+    return seg
+
+
+def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
+    """Plane-stress return in the rotated basis (sum, difference, shear) of Simo and Taylor (1986).
+
+    With deps_p = dgamma dev(sig) and sig = sig_tr - dgamma C_ps deps_p, the sum xx + yy scales by
+    f1 = 1 / (1 + c1 dgamma), c1 = E / (3 (1 - nu)), and xx - yy and xy by f2 = 1 / (1 + 2 G dgamma), so
+    sigma_eq^2 = A f1^2 + B f2^2 with A = (xx + yy)^2 / 4, B = 3 (xx - yy)^2 / 4 + 3 xy^2 of the trial
+    stress, and dp = 2/3 dgamma sigma_eq. The segment of the table is found in closed form, then
+    sigma_eq = sigma_y(p_n + dp) is solved by a bracketed Newton iteration on that (smooth) segment.
+    """
+    E, nu, G = elastic.E, elastic.nu, elastic.mu
+    c1, c2 = E / (3.0 * (1.0 - nu)), 2.0 * G
+    sig, p, deps_p = sig_tr.copy(), p_n.copy(), np.zeros_like(sig_tr)
+    D = np.tile(np.diag([1.0, 1.0, 0.0, 1.0]), (len(p), 1, 1))
+    a_all = sig_tr[:, 0] + sig_tr[:, 1]
+    b_all = sig_tr[:, 0] - sig_tr[:, 1]
+    A_all = 0.25 * a_all ** 2                               # sigma_eq^2 = A f1^2 + B f2^2
+    B_all = 0.75 * b_all ** 2 + 3.0 * sig_tr[:, 3] ** 2
+    q = np.sqrt(A_all + B_all)
+    y_n = hardening.sigma_y(p_n)
+    i = np.flatnonzero(q > y_n)
+    if i.size == 0:
+        return sig, p, D, deps_p
+    a, b, t, A, B, q, y_n, pn = a_all[i], b_all[i], sig_tr[i, 3], A_all[i], B_all[i], q[i], y_n[i], p_n[i]
+    p0, s0, h0 = hardening.segments
+    seg = _plane_stress_segment(A, B, pn, c1, c2, hardening)
+    H = h0[seg]
+    Y0 = s0[seg] + H * (pn - p0[seg])      # the segment's straight line evaluated at p_n
+    # phi(g) = sigma_eq(g) (1 - 2/3 H g) - Y0, strictly decreasing, root bracketed by [0, g_hi]
+    lo, hi = np.zeros_like(q), (q / y_n - 1.0) / c1
+    c = (c1 * A + c2 * B) / (A + B)
+    den0 = c * Y0 + 2.0 / 3.0 * H * q                        # start: all modes scaled by 1 / (1 + c g)
+    g = np.clip(np.where(den0 > 0.0, (q - Y0) / np.where(den0 > 0.0, den0, 1.0), 0.5 * hi), 0.0, hi)
+    act = np.arange(len(q))
+    for _ in range(200):
+        ga, Aa, Ba, Ha = g[act], A[act], B[act], H[act]
+        f1, f2 = 1.0 / (1.0 + c1 * ga), 1.0 / (1.0 + c2 * ga)
+        se = np.sqrt(Aa * f1 ** 2 + Ba * f2 ** 2)
+        dse = -(c1 * Aa * f1 ** 3 + c2 * Ba * f2 ** 3) / se
+        phi = se * (1.0 - 2.0 / 3.0 * Ha * ga) - Y0[act]
+        dphi = dse * (1.0 - 2.0 / 3.0 * Ha * ga) - 2.0 / 3.0 * Ha * se
+        lo[act] = np.where(phi > 0.0, ga, lo[act])
+        hi[act] = np.where(phi < 0.0, ga, hi[act])
+        new = ga - phi / dphi
+        out = ~((new > lo[act]) & (new < hi[act]))
+        new = np.where(phi == 0.0, ga, np.where(out, 0.5 * (lo[act] + hi[act]), new))
+        g[act] = new
+        act = act[np.abs(new - ga) > 1e-13 * new + 1e-15 / c1]     # relative, or round-off of c1 g
+        if act.size == 0:
+            break
+    else:
+        raise RuntimeError("plane-stress return mapping did not converge")
+    f1, f2 = 1.0 / (1.0 + c1 * g), 1.0 / (1.0 + c2 * g)
+    se = np.sqrt(A * f1 ** 2 + B * f2 ** 2)
+    dse = -(c1 * A * f1 ** 3 + c2 * B * f2 ** 3) / se
+    w = 1.0 - 2.0 / 3.0 * H * g
+    dphi = dse * w - 2.0 / 3.0 * H * se
+    out = np.zeros((len(g), 4))
+    out[:, 0] = 0.5 * (a * f1 + b * f2)
+    out[:, 1] = 0.5 * (a * f1 - b * f2)
+    out[:, 3] = t * f2
+    sig[i] = out
+    p[i] = pn + 2.0 / 3.0 * g * se
+    deps_p[i] = g[:, None] * deviator(out)
+    # D = M(g) + (d sig / d g) (x) (d g / d sig_tr), d g / d sig_tr = -(d phi / d sig_tr) / phi'
+    Di = np.zeros((len(g), 4, 4))
+    Di[:, 0, 0] = Di[:, 1, 1] = 0.5 * (f1 + f2)
+    Di[:, 0, 1] = Di[:, 1, 0] = 0.5 * (f1 - f2)
+    Di[:, 3, 3] = f2
+    da, db, dt = -c1 * a * f1 ** 2, -c2 * b * f2 ** 2, -c2 * t * f2 ** 2
+    dsig_dg = np.stack([0.5 * (da + db), 0.5 * (da - db), np.zeros_like(g), dt], axis=1)
+    dA = np.stack([0.5 * a, 0.5 * a, np.zeros_like(g), np.zeros_like(g)], axis=1)
+    dB = np.stack([1.5 * b, -1.5 * b, np.zeros_like(g), 6.0 * t], axis=1)
+    dphi_dsig = (w / (2.0 * se))[:, None] * (f1[:, None] ** 2 * dA + f2[:, None] ** 2 * dB)
+    Di += dsig_dg[:, :, None] * (-dphi_dsig / dphi[:, None])[:, None, :]
+    D[i] = Di
+    return sig, p, D, deps_p
+
+
+def chen_update(sig_rot: ArrayLike, sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
+                model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One explicit increment of Chen Zhi-da's single-parameter law (theory 4.4).
+
+    Rate law: s_dot = 2G [e_dot - beta (s:e_dot) s / (s:s)] with beta = 1 - E_t / (3G) on loading and 0 on
+    unloading; the volumetric part is elastic. E_t = E H / (E + H) is the uniaxial tangent from the hardening
+    slope H at p_n. The straight stress path from sig_rot to sig_tr is elastic up to the fraction r where it
+    meets the yield surface sigma_eq = sigma_y(p_n) (r = 0 if sig_rot is already on or outside it); the rest
+    (1 - r) follows the rate law with s frozen at the crossing point s_c (forward Euler), provided
+    s_c : (sig_tr - sig_rot) > 0. In plane stress the rate law is condensed so that sigma_zz stays 0. The
+    result in all models is sig = sig_tr - kappa C s_c with the model's stiffness C and
+    kappa = (1 - r) s_c:(sig_tr - sig_rot) / (2G (1 - beta)/beta s_c:s_c + s_c:C s_c); deps_p = kappa s_c
+    and p grows by the plastic work, sigma_eq(s_c) dp = s_c : deps_p.
+
+    Parameters
+    ----------
+    sig_rot : array_like, (N, 4)
+        Stress at the start of the increment, already rotated to the current configuration.
+    sig_tr : array_like, (N, 4)
+        sig_rot plus the elastic predictor C : deps (zz = 0 for "plane_stress").
+    p_n : array_like, (N,)
+        Equivalent plastic strain at the start of the increment.
+    elastic, hardening, model
+        As in :func:`j2_return`.
+
+    Returns
+    -------
+    sig, p, deps_p
+        As in :func:`j2_return`.
+    D_tr, D_rot : (N, 4, 4)
+        d sig / d sig_tr and d sig / d sig_rot of the discrete map (exact away from the switches between
+        elastic, crossing and plastic points); zz rows and columns are zero in plane stress.
+
+    Notes
+    -----
+    The update is explicit and the drift off the surface sigma_eq = sigma_y(p) is not corrected:
+    outwards by O(increment^2) per plastic step where the direction of straining turns (the surface is
+    convex), i.e. O(increment) after a corner of the path; the next loading step starts from the drifted
+    stress with r = 0. For nu < 0.5, beta exceeds the J2 value 3G / (3G + H) and p grows faster than
+    the table needs: the next increment starts inside the surface and its first part is elastic, so in the
+    limit of small increments the law follows sigma_eq = sigma_y(p) with the J2 flow and the
+    compressibility difference between the two laws (theory 4.4) disappears.
+    """
+    check_model(model)
+    x, y = as_points(sig_tr, "sig_tr"), as_points(sig_rot, "sig_rot")
+    if x.shape != y.shape:
+        raise ValueError(f"sig_tr {x.shape} and sig_rot {y.shape} must have the same shape")
+    p_n = np.broadcast_to(np.asarray(p_n, dtype=float), x.shape[:1]).copy()
+    if model == "plane_stress":
+        check_plane_stress(x, "sig_tr")
+        check_plane_stress(y, "sig_rot")
+        x[:, 2] = y[:, 2] = 0.0
+    C = elastic.stiffness(model)
+    G = elastic.mu
+    d = x - y
+    s0, ds = deviator(y), deviator(d)
+    y_n = hardening.sigma_y(p_n)
+    # the path s0 + t ds meets the surface 3/2 |s|^2 = sigma_y^2 where qa t^2 + qb t + qc = 0
+    qa, qb, qc = ddot(ds, ds), 2.0 * ddot(s0, ds), ddot(s0, s0) - 2.0 / 3.0 * y_n ** 2
+    outside = qc >= 0.0
+    crossing = ~outside & (qa + qb + qc > 0.0)
+    r = np.zeros(len(x))
+    j = np.flatnonzero(crossing)
+    disc = np.sqrt(qb[j] ** 2 - 4.0 * qa[j] * qc[j])
+    r[j] = np.where(qb[j] >= 0.0, -2.0 * qc[j] / (qb[j] + disc), (disc - qb[j]) / (2.0 * qa[j]))
+    s_c = s0 + r[:, None] * ds
+    a = ddot(s_c, d)
+    sig, p, deps_p = x.copy(), p_n.copy(), np.zeros_like(x)
+    eye = np.diag([1.0, 1.0, 0.0, 1.0]) if model == "plane_stress" else np.eye(4)
+    D_tr = np.tile(eye, (len(x), 1, 1))
+    D_rot = np.zeros_like(D_tr)
+    i = np.flatnonzero((outside | crossing) & (a > 0.0))
+    if i.size == 0:
+        return sig, p, D_tr, D_rot, deps_p
+    r, sc, d, ds, a, cross = r[i], s_c[i], d[i], ds[i], a[i], crossing[i]
+    h = hardening.slope(p_n[i])
+    beta = 1.0 - elastic.E * h / (elastic.E + h) / (3.0 * G)   # > 0 since E_t < E < 3G
+    g1 = 2.0 * G * (1.0 - beta) / beta
+    Ws, Cs = WEIGHT * sc, sc @ C.T
+    ss = np.sum(Ws * sc, axis=1)
+    den = g1 * ss + np.sum(Ws * Cs, axis=1)
+    kappa = (1.0 - r) * a / den
+    sig[i] = x[i] - kappa[:, None] * Cs
+    deps_p[i] = kappa[:, None] * sc
+    p[i] += 2.0 / 3.0 * kappa * np.sqrt(1.5 * ss)
+    # tangents: r(x, y) from s_c:s_c = 2/3 sigma_y^2 at crossing points, constant elsewhere
+    gd = np.sum(Ws * ds, axis=1)
+    fr = np.divide(1.0, gd, out=np.zeros_like(gd), where=cross)
+    r_x, r_y = (-r * fr)[:, None] * Ws, (-(1.0 - r) * fr)[:, None] * Ws
+    J_x = r[:, None, None] * PDEV + ds[:, :, None] * r_x[:, None, :]         # d s_c / d x
+    J_y = (1.0 - r)[:, None, None] * PDEV + ds[:, :, None] * r_y[:, None, :]
+    Wd = WEIGHT * d
+    a_x = np.einsum("nij,ni->nj", J_x, Wd) + Ws
+    a_y = np.einsum("nij,ni->nj", J_y, Wd) - Ws
+    v = 2.0 * g1[:, None] * Ws + WEIGHT * Cs + Ws @ C                        # d den / d s_c
+    for J, r_, a_, D, direct in ((J_x, r_x, a_x, D_tr, True), (J_y, r_y, a_y, D_rot, False)):
+        den_ = np.einsum("nij,ni->nj", J, v)
+        k_ = ((-a / den)[:, None] * r_ + ((1.0 - r) / den)[:, None] * a_
+              - ((1.0 - r) * a / den ** 2)[:, None] * den_)
+        Di = -Cs[:, :, None] * k_[:, None, :] - kappa[:, None, None] * np.einsum("ij,njk->nik", C, J)
+        D[i] = Di + eye if direct else Di
+    if model == "plane_stress":
+        for D in (D_tr, D_rot):
+            D[:, 2, :] = 0.0
+            D[:, :, 2] = 0.0
+    return sig, p, D_tr, D_rot, deps_p
