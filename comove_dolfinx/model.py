@@ -31,7 +31,7 @@ from petsc4py import PETSc
 
 from . import materials as mat
 from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
-from .quadrature import QuadratureRule
+from .quadrature import CellInterpolator, QuadratureRule
 from .updates import make_update
 
 
@@ -146,6 +146,7 @@ class Model:
         self.boundary_terms = []           # objects with residual(model), set_load, commit, restore
         self.load = 0.0
         self._compiled = False
+        self._facet: dict = {}             # DG copies of quadrature data, for facet integrals
 
     # ----------------------------------------------------------------------------------------
     # Boundary conditions and loads (before finalize)
@@ -249,6 +250,45 @@ class Model:
         self._compiled = True
         self.set_load(0.0)
 
+    def nominal_traction(self, N, u=None):
+        """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the
+        current one), for Nitsche terms: facet integrals cannot see quadrature functions, so the
+        stored stress enters through a cell-wise DG fit (exact for DG1 and the 3-point rule) and the
+        update is re-expressed on it."""
+        u = self.u if u is None else u
+        up = self.update.build(u, self.u_n, self._facet_state("sigma_n"))
+        sig = up.sigma
+        if self.plasticity is not None:
+            sig = sig + to_tensor(self._facet_state("plastic_correction"))
+        if self.kin.model == PLANE_STRESS:
+            F22 = self._facet_state("F22") if self.F22_q is not None else up.F22
+            F = self.kin.F3(u, F22)
+        else:
+            F = self.kin.F3(u)
+        PN = ufl.det(F) * sig * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0.0])
+        return ufl.as_vector([PN[0], PN[1]])
+
+    def _facet_state(self, name: str):
+        """DG function holding a cell-wise fit of quadrature data ``name`` (created on first use):
+        "sigma_n" and "plastic_correction" (4-vectors), "F22" (scalar)."""
+        if name not in self._facet:
+            scalar = name == "F22"
+            k = max(self.degree - 1, 0)
+            cell = self.mesh.ufl_cell()
+            el = (ufl.FiniteElement("DG", cell, k) if scalar else
+                  ufl.VectorElement("DG", cell, k, dim=4))
+            f = fem.Function(fem.FunctionSpace(self.mesh, el), name=name + "_dg")
+            if scalar:
+                f.x.array[:] = 1.0
+            self._facet[name] = (f, CellInterpolator(self.rule, f.function_space))
+        return self._facet[name][0]
+
+    def _fit_facet(self, name: str, values) -> None:
+        """Refresh the DG copy of ``name`` if a facet term uses it."""
+        if name in self._facet:
+            f, interp = self._facet[name]
+            interp(values, f)
+
     # ----------------------------------------------------------------------------------------
     # Load factor, constitutive evaluation, commit / restore
     # ----------------------------------------------------------------------------------------
@@ -287,6 +327,10 @@ class Model:
             self._plastic_update(sig_rot, sig_tr)
         if self._state_new is not None:
             self._state_new[:] = vals[:, col:col + 4]
+        if self.plasticity is not None:
+            self._fit_facet("plastic_correction", self.cauchy_stress() - sig_tr)
+            if self.F22_q is not None:
+                self._fit_facet("F22", self.F22_q.x.array)
 
     def _plastic_update(self, sig_rot, sig_tr) -> None:
         plast = self.plasticity
@@ -310,6 +354,8 @@ class Model:
 
     def commit(self) -> None:
         """Accept the current iterate as the converged state of the increment."""
+        for term in self.boundary_terms:          # before u_n moves: they may need the increment
+            term.commit(self)
         self.u_n.x.array[:] = self.u.x.array
         if self._state_new is not None:
             self.rule.view(self.sigma_n)[:] = self._state_new
@@ -319,8 +365,7 @@ class Model:
             self.p_n.x.array[:] = self.p.x.array
             if self.F22_q is not None:
                 self.F22_n.x.array[:] = self.F22_q.x.array
-        for term in self.boundary_terms:
-            term.commit(self)
+        self._fit_facet("sigma_n", self.rule.view(self.sigma_n))
 
     def restore(self) -> None:
         """Return to the last converged state (after a failed increment)."""

@@ -76,3 +76,32 @@ class QuadratureRule:
         """Quadrature-weighted cell averages of per-point values (points, ...) -> (cells, ...)."""
         v = values.reshape((len(self.cells), self.npts) + values.shape[1:])
         return np.tensordot(self.weights / self.weights.sum(), v, axes=([0], [1]))
+
+
+class CellInterpolator:
+    """Cell-wise least-squares fit of quadrature-point values by a discontinuous Lagrange field.
+
+    Used where quadrature data must be seen on facets (dolfinx cannot evaluate quadrature functions
+    there): with DG1 and the 3-point rule of degree 2 the fit interpolates the point values exactly.
+    """
+
+    def __init__(self, rule: QuadratureRule, V_dg: fem.FunctionSpace):
+        el = V_dg.ufl_element()
+        sub = el.sub_elements()[0] if el.num_sub_elements() else el
+        k = sub.degree()
+        cell = _CELLS[rule.mesh.ufl_cell().cellname()]
+        basis = basix.create_element(basix.ElementFamily.P, cell, k, basix.LagrangeVariant.equispaced,
+                                     True)
+        B = basis.tabulate(0, rule.points)[0, :, :, 0]               # (points, dofs)
+        BW = B.T * rule.weights
+        self.proj = np.linalg.solve(BW @ B, BW)                      # (dofs, points)
+        ncell = len(rule.cells)
+        self.dofs = V_dg.dofmap.list.array.reshape(-1, B.shape[1])[:ncell]
+        self.rule = rule
+
+    def __call__(self, values: np.ndarray, f: fem.Function) -> None:
+        """Fit ``values`` (points, components) into the DG function ``f``."""
+        r = self.rule
+        comps = values.reshape(r.size, -1).shape[1]
+        v = values.reshape(len(r.cells), r.npts, comps)
+        f.x.array.reshape(-1, comps)[self.dofs] = np.einsum("dp,cpk->cdk", self.proj, v)

@@ -7,9 +7,10 @@ the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic ana
 Convergence: ||R|| <= rtol * R_scale + atol, with R_scale the largest initial residual norm of the
 increments so far (a force scale of the run), or a Newton correction ||du|| <= stol * ||u|| (the
 residual of a stiff body stalls at a round-off floor set by its internal forces, which can exceed
-rtol * R_scale when the load increments are small). A Newton correction that leads to an inadmissible
-iterate (det F <= 0, or an increment the S-R split cannot represent) is halved up to ``backtracks``
-times. An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
+rtol * R_scale when the load increments are small). Each Newton correction goes through a
+backtracking line search: it is halved (up to ``backtracks`` times) while it leads to an inadmissible
+iterate (det F <= 0, or an increment the S-R split cannot represent) or fails to lower ||R|| (which
+stops the active-set cycling of contact problems). An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
 ``divergence`` over the increment's first fails the increment; the loop
 then restores the last converged state and halves the increment, up to ``max_cutbacks`` times in a
 row, then stops cleanly (every converged increment has already been handed to the callbacks).
@@ -61,8 +62,9 @@ class NewtonSettings:
     atol: float = 1e-12
     stol: float = 1e-10
     max_it: int = 25
-    divergence: float = 1e6
+    divergence: float = 1e12
     backtracks: int = 4
+    line_search: bool = True
 
 
 class Newton:
@@ -99,6 +101,34 @@ class Newton:
             b.scale(-1.0)
         return b.norm()
 
+    def _line_search(self, r_old: float):
+        """Move u along the Newton correction du: the full step if it is admissible and lowers
+        ||R||; otherwise halve it (up to ``backtracks`` times) until ||R|| <= (1 - 1e-4 alpha) r_old,
+        keeping the best admissible step when none does. Returns (||R||, alpha, error or None)."""
+        m, s = self.model, self.settings
+        du = m.du.x.array
+        u0 = m.u.x.array.copy()
+        best, alpha, err = None, 1.0, None
+        for _ in range(s.backtracks + 1):
+            m.u.x.array[:] = u0 + alpha * du
+            try:
+                r = self.residual()
+            except (InvertedElement, ReturnMapFailure) as e:
+                err = e
+                alpha *= 0.5
+                continue
+            if best is None or r < best[0]:
+                best = (r, alpha)
+            if not s.line_search or r <= (1.0 - 1e-4 * alpha) * r_old:
+                return r, alpha, None
+            alpha *= 0.5
+        if best is None:
+            m.u.x.array[:] = u0
+            return r_old, 0.0, err
+        r, alpha = best
+        m.u.x.array[:] = u0 + alpha * du
+        return self.residual(), alpha, None
+
     def solve(self) -> tuple[bool, int, str]:
         """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""
         m, s = self.model, self.settings
@@ -119,21 +149,11 @@ class Newton:
                 self.ksp.solve(self.b, m.du.vector)
                 m.du.x.scatter_forward()
             dnorm = m.du.vector.norm()
-            alpha, err = 1.0, None
-            for _ in range(s.backtracks + 1):
-                m.u.x.array[:] += alpha * m.du.x.array
-                try:
-                    rnorm = self.residual()
-                    err = None
-                    break
-                except (InvertedElement, ReturnMapFailure) as e:
-                    err = e
-                    m.u.x.array[:] -= alpha * m.du.x.array
-                    alpha *= 0.5
+            rnorm, alpha, err = self._line_search(rnorm)
             if err is not None:
                 return False, it, str(err)
             if alpha < 1.0:
-                log.info("    Newton %2d: step scaled by %g to stay admissible", it, alpha)
+                log.info("    Newton %2d: step scaled by %g", it, alpha)
             self.history.append((rnorm, dnorm))
             log.info("    Newton %2d: |R| = %.3e (rel %.1e), |du| = %.3e", it, rnorm,
                      rnorm / max(self.residual_scale, 1e-300), dnorm)
@@ -163,9 +183,10 @@ class Increment:
 
     step: int
     load: float
-    newton_its: int
-    wall_s: float
+    newton_its: int               # iterations of the converged attempt
+    wall_s: float                 # wall time since the previous increment, failed attempts included
     cutbacks: int = 0
+    failed_its: int = 0           # iterations spent in failed attempts of this increment
 
 
 @dataclass
@@ -190,6 +211,7 @@ class IncrementalSolver:
             raise ValueError(f"n_steps = {self.steps.n_steps}: need at least one increment")
         self.timer = timer or Timer()
         self.newton = Newton(model, newton, self.timer)
+        self.max_passes = max([getattr(t, "max_passes", 1) for t in model.boundary_terms] + [1])
 
     def run(self, callbacks=(), progress=None) -> RunResult:
         """Run the increments; each callback(model, increment) is called after every converged one.
@@ -202,6 +224,7 @@ class IncrementalSolver:
         u_prev = m.u.x.array.copy()
         dt_prev = None
         result = RunResult()
+        t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
         while t < st.t_end - tol:
             dt = min(dt, st.t_end - t)
@@ -209,11 +232,17 @@ class IncrementalSolver:
             m.set_load(t_try)
             if st.predictor and dt_prev:
                 m.u.x.array[:] = m.u_n.x.array + (dt / dt_prev) * (m.u_n.x.array - u_prev)
-            t0 = time.perf_counter()
             ok, its, reason = self.newton.solve()
+            passes = 1
+            while ok and passes < self.max_passes and any([term.relag_pass(m) for term in
+                                                           m.boundary_terms]):
+                ok, more, reason = self.newton.solve()     # true Coulomb: re-lag the pressure
+                its += more
+                passes += 1
             if not ok:
                 m.restore()
                 cut += 1
+                failed_its += its
                 log.info("  increment to t = %.6g failed (%s)", t_try, reason)
                 if cut > st.max_cutbacks:
                     m.set_load(t)
@@ -223,17 +252,18 @@ class IncrementalSolver:
                 dt *= 0.5
                 easy = 0
                 continue
-            u_prev[:] = m.u_n.x.array
-            m.commit()
             dt_prev, t, step = dt, t_try, step + 1
-            inc = Increment(step, t, its, time.perf_counter() - t0, cut)
+            inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its)
             result.increments.append(inc)
-            cut = 0
-            with self.timer("output"):
+            cut, failed_its = 0, 0
+            with self.timer("output"):            # before commit: the increment is still visible
                 for cb in callbacks:
                     cb(m, inc)
+            u_prev[:] = m.u_n.x.array
+            m.commit()
             if progress is not None:
                 progress.update(dt)
+            t_mark = time.perf_counter()
             easy = easy + 1 if its <= st.easy_its else 0
             # grow back towards the nominal increment, staying on the grid of the doubled step
             if easy >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:

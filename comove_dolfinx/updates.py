@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import ufl
 
-from .kinematics import (AXISYMMETRIC, PLANE_STRESS, Kinematics, embed, increment_gradient,
+from .kinematics import (PLANE_STRESS, Kinematics, embed, increment_gradient,
                          polar_rotation_2d, sr_decomposition, to_tensor, to_vec)
 from .materials import Elastic
 
@@ -194,5 +194,3 @@ def make_update(name: str, kin: Kinematics, elastic: Elastic) -> StressUpdate:
         raise ValueError(f"unknown stress update {name!r}: choose one of "
                          f"{', '.join(UPDATES)}") from None
 
-
-__all__ = ["UPDATES", "UpdateExpr", "StressUpdate", "make_update", "hooke", "AXISYMMETRIC"]

@@ -1,0 +1,354 @@
+"""The scenes: parameters with the defaults of scenes.md, validation, and how each builds its model.
+
+Units: cm and kgf (stresses in kgf/cm^2), as in Shang & Chen's examples.
+
+Every scene is a dataclass; ``comove scenes`` lists the fields with their defaults and ``--set
+key=value`` overrides them. A scene builds its mesh (``mesh_data``) and its model (``build_model``),
+names the columns of its history and fills the scene-specific ones (``history_row``).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import ClassVar
+
+from . import geometry
+from .contact import METHODS, Contact, Plane
+from .materials import Elastic
+from .model import Model
+from .output import Probe
+from .updates import UPDATES
+
+COMMON_COLUMNS = ("newton_its", "wall_s")
+
+
+class SceneError(ValueError):
+    """A scene name or parameter that cannot be used; the message says what to do."""
+
+
+@dataclass
+class Scene:
+    """Parameters shared by every scene (numerics)."""
+
+    name: ClassVar[str] = ""
+    summary: ClassVar[str] = ""
+    kind: ClassVar[str] = ""
+    columns: ClassVar[tuple[str, ...]] = ()
+    doc: ClassVar[dict[str, str]] = {
+        "E": "Young's modulus [kgf/cm^2]", "nu": "Poisson's ratio",
+        "update": f"stress update: {', '.join(UPDATES)}",
+        "degree": "displacement degree (1 or 2)", "size": "mesh size [cm]",
+        "order": "geometry order of the mesh (0: same as degree)",
+        "n_steps": "nominal number of equal load increments",
+        "max_cutbacks": "halvings of a failed increment before the run stops",
+        "mesh": "a Gmsh .msh file to use instead of the built-in geometry",
+    }
+
+    E: float = 1000.0
+    nu: float = 0.3
+    update: str = "sr"
+    degree: int = 2
+    size: float = 0.125
+    order: int = 0
+    n_steps: int = 20
+    max_cutbacks: int = 6
+    mesh: str = ""
+
+    # -- parameters --------------------------------------------------------------------------
+    def validate(self) -> None:
+        """Raise SceneError (or MaterialError) naming any unusable value and the fix."""
+        self.elastic()
+        if self.update not in UPDATES:
+            raise SceneError(f"update = {self.update!r} is unknown: choose one of {', '.join(UPDATES)}")
+        if self.degree not in (1, 2):
+            raise SceneError(f"degree = {self.degree}: use 1 or 2")
+        if self.order not in (0, 1, 2):
+            raise SceneError(f"order = {self.order}: use 1, 2 or 0 (same as degree)")
+        if not self.size > 0:
+            raise SceneError(f"size = {self.size}: the mesh size must be > 0")
+        if self.n_steps < 1:
+            raise SceneError(f"n_steps = {self.n_steps}: need at least one increment")
+        if self.max_cutbacks < 0:
+            raise SceneError(f"max_cutbacks = {self.max_cutbacks} must be >= 0")
+
+    def elastic(self) -> Elastic:
+        return Elastic(self.E, self.nu)
+
+    @property
+    def geometry_order(self) -> int:
+        return self.order or self.degree
+
+    @classmethod
+    def parameters(cls) -> list[tuple[str, object, str]]:
+        """(name, default, description) of every parameter."""
+        out = []
+        for f in dataclasses.fields(cls):
+            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            out.append((f.name, default, cls.doc.get(f.name, "")))
+        return out
+
+    def with_overrides(self, pairs: list[str]) -> "Scene":
+        """A copy with ``key=value`` overrides converted to each field's type."""
+        types = {f.name: type(f.default) if f.default is not dataclasses.MISSING else str
+                 for f in dataclasses.fields(self)}
+        changes = {}
+        for pair in pairs:
+            key, sep, text = pair.partition("=")
+            key = key.strip()
+            if not sep:
+                raise SceneError(f"--set {pair!r}: write key=value")
+            if key not in types:
+                raise SceneError(f"scene {self.name!r} has no parameter {key!r}; its parameters are: "
+                                 f"{', '.join(types)} (see 'comove scenes')")
+            changes[key] = _convert(key, text.strip(), types[key])
+        return dataclasses.replace(self, **changes)
+
+    # -- model -------------------------------------------------------------------------------
+    def load_msh(self, comm, required):
+        return geometry.load_msh(self.mesh, comm, required=required)
+
+    def mesh_data(self, comm):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def build_model(self, meshdata) -> Model:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    @property
+    def load_max(self) -> float:
+        """Value of the history's ``load`` column at load factor 1."""
+        raise NotImplementedError
+
+    def history_columns(self) -> list[str]:
+        return ["step", "load", *self.columns, *COMMON_COLUMNS]
+
+    def history_row(self, model) -> dict:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def contacts(self) -> list:
+        """The contact terms of the built model (none for a scene without obstacles)."""
+        return []
+
+
+def _convert(key: str, text: str, typ):
+    try:
+        if typ is bool:
+            if text.lower() in ("1", "true", "yes", "on"):
+                return True
+            if text.lower() in ("0", "false", "no", "off"):
+                return False
+            raise ValueError
+        return typ(text)
+    except ValueError:
+        raise SceneError(f"{key}={text!r} is not a valid {typ.__name__}") from None
+
+
+# ------------------------------------------------------------------------------------------------
+@dataclass
+class Elastica(Scene):
+    """Verification: cantilever under a dead vertical tip load (Mattiasson's elastica, theory 7.1)."""
+
+    name: ClassVar[str] = "elastica"
+    summary: ClassVar[str] = ("cantilever L=10, h=0.25 (plane stress), dead tip load "
+                              "lam = P L^2/(E I); compare with the elastica")
+    kind: ClassVar[str] = "plane_stress"
+    columns: ClassVar[tuple[str, ...]] = ("tip_ux", "tip_uy")
+    doc: ClassVar[dict[str, str]] = {**Scene.doc, "L": "length [cm]", "h": "depth [cm]",
+                                     "lam": "final load parameter P L^2/(E I)"}
+
+    L: float = 10.0
+    h: float = 0.25
+    lam: float = 5.0
+    n_steps: int = 10
+
+    def validate(self):
+        super().validate()
+        if not (self.L > 0 and self.h > 0):
+            raise SceneError(f"L = {self.L}, h = {self.h}: both must be > 0")
+
+    def mesh_data(self, comm):
+        need = ("left", "right")
+        if self.mesh:
+            return self.load_msh(comm, need)
+        return geometry.rectangle(self.L, self.h, self.size, order=self.geometry_order, comm=comm)
+
+    @property
+    def load_max(self):
+        return self.lam
+
+    def build_model(self, md):
+        m = Model(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
+        EI = self.E * self.h ** 3 / 12.0
+        P = self.lam * EI / self.L ** 2
+        m.fix("left")
+        m.dead_traction("right", (0.0, -P / self.h))   # total P per unit thickness, downwards
+        self._tip = Probe(m.V, (self.L, 0.5 * self.h))
+        return m
+
+    def history_row(self, model):
+        ux, uy = self._tip(model.u)
+        return {"tip_ux": ux, "tip_uy": uy}
+
+
+@dataclass
+class ContactScene(Scene):
+    """A scene whose body meets rigid obstacles: the contact parameters."""
+
+    doc: ClassVar[dict[str, str]] = {
+        **Scene.doc, "gap": "distance from the contact face to the rigid plane [cm]",
+        "mu": "Coulomb friction coefficient",
+        "contact": f"contact method: {', '.join(METHODS)} or off",
+        "gamma0": "contact stiffness gamma0: gamma = gamma0 E / h (penalty and Nitsche)",
+        "theta": "Nitsche variant: 1 symmetric, 0, -1 skew-symmetric",
+        "relag": "true Coulomb: re-solve each increment until the lagged pressure settles"}
+
+    gap: float = 1.0
+    mu: float = 0.1
+    contact: str = "penalty"
+    gamma0: float = 100.0
+    theta: int = 0
+    relag: bool = False
+
+    def validate(self):
+        super().validate()
+        if self.mu < 0:
+            raise SceneError(f"mu = {self.mu}: the friction coefficient must be >= 0")
+        if self.contact not in (*METHODS, "off"):
+            raise SceneError(f"contact = {self.contact!r}: choose {', '.join(METHODS)} or off")
+        if not self.gamma0 > 0:
+            raise SceneError(f"gamma0 = {self.gamma0} must be > 0")
+        if self.theta not in (1, 0, -1):
+            raise SceneError(f"theta = {self.theta}: use 1, 0 or -1")
+        if not self.gap > 0:
+            raise SceneError(f"gap = {self.gap}: the obstacle must start clear of the body (gap > 0)")
+
+    def contacts(self) -> list:
+        term = getattr(self, "contact_term", None)
+        return [term] if term is not None else []
+
+    def add_contact(self, model, boundary: str, obstacle) -> Contact | None:
+        """Attach a contact term (or nothing when contact = off)."""
+        if self.contact == "off":
+            return None
+        c = Contact(boundary, obstacle, method=self.contact, gamma0=self.gamma0, theta=self.theta,
+                    mu=self.mu, relag=self.relag)
+        model.boundary_terms.append(c)
+        return c
+
+
+@dataclass
+class Beam(ContactScene):
+    """Cantilever pressed onto a rigid foundation by a follower pressure (scenes.md)."""
+
+    name: ClassVar[str] = "beam"
+    summary: ClassVar[str] = ("cantilever L=10, h=0.5 (plane stress) under follower pressure q "
+                              "up to 0.5, rigid plane 3 below, mu = 0.1")
+    kind: ClassVar[str] = "plane_stress"
+    columns: ClassVar[tuple[str, ...]] = ("tip_ux", "tip_uy", "contact_length", "contact_force")
+    doc: ClassVar[dict[str, str]] = {**ContactScene.doc, "L": "length [cm]", "h": "depth [cm]",
+                                     "q_max": "final pressure on the upper face [kgf/cm^2]"}
+
+    L: float = 10.0
+    h: float = 0.5
+    q_max: float = 0.5
+    gap: float = 3.0
+
+    def validate(self):
+        super().validate()
+        if not (self.L > 0 and self.h > 0):
+            raise SceneError(f"L = {self.L}, h = {self.h}: both must be > 0")
+
+    def mesh_data(self, comm):
+        need = ("left", "top", "bottom")
+        if self.mesh:
+            return self.load_msh(comm, need)
+        return geometry.rectangle(self.L, self.h, self.size, order=self.geometry_order, comm=comm)
+
+    @property
+    def load_max(self):
+        return self.q_max
+
+    def build_model(self, md):
+        m = Model(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
+        m.fix("left")
+        m.follower_pressure("top", self.q_max)
+        self.contact_term = self.add_contact(m, "bottom", Plane((0.0, -self.gap), (0.0, 1.0)))
+        self._tip = Probe(m.V, (self.L, 0.0))
+        return m
+
+    def history_row(self, model):
+        ux, uy = self._tip(model.u)
+        c = self.contact_term
+        length = c.zone().extent if c else 0.0
+        force = c.force()[1] if c else 0.0
+        return {"tip_ux": ux, "tip_uy": uy, "contact_length": length, "contact_force": force}
+
+
+@dataclass
+class Plate(ContactScene):
+    """Thick circular plate pressed onto a rigid base (axisymmetric, scenes.md)."""
+
+    name: ClassVar[str] = "plate"
+    summary: ClassVar[str] = ("circular plate R=10, t=2 (axisymmetric), follower pressure p up to "
+                              "10, lower rim held in z, rigid base 1.5 below, mu = 0.1")
+    kind: ClassVar[str] = "axisymmetric"
+    columns: ClassVar[tuple[str, ...]] = ("center_uz", "contact_radius", "rim_ur", "contact_force")
+    doc: ClassVar[dict[str, str]] = {**ContactScene.doc, "R": "radius [cm]", "t": "thickness [cm]",
+                                     "z_support": "height of the supported part of the rim [cm]",
+                                     "p_max": "final pressure on the upper face [kgf/cm^2]"}
+
+    R: float = 10.0
+    t: float = 2.0
+    z_support: float = 0.25
+    p_max: float = 10.0
+    gap: float = 1.5
+    size: float = 0.25
+
+    def validate(self):
+        super().validate()
+        if not (self.R > 0 and self.t > 0 and 0 < self.z_support < self.t):
+            raise SceneError(f"R = {self.R}, t = {self.t}, z_support = {self.z_support}: need R, t > 0 "
+                             "and 0 < z_support < t")
+
+    def mesh_data(self, comm):
+        need = ("axis", "top", "bottom", "rim_support")
+        if self.mesh:
+            return self.load_msh(comm, need)
+        return geometry.plate_section(self.R, self.t, self.z_support, self.size,
+                                      order=self.geometry_order, comm=comm)
+
+    @property
+    def load_max(self):
+        return self.p_max
+
+    def build_model(self, md):
+        m = Model(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
+        m.fix("axis", component=0)            # u_r = 0 on the axis of symmetry
+        m.fix("rim_support", component=1)     # lower part of the rim: u_z = 0, free in r
+        m.follower_pressure("top", self.p_max)
+        self.contact_term = self.add_contact(m, "bottom", Plane((0.0, -self.gap), (0.0, 1.0)))
+        self._center = Probe(m.V, (0.0, 0.0))
+        self._rim = Probe(m.V, (self.R, 0.0))
+        return m
+
+    def history_row(self, model):
+        c = self.contact_term
+        radius, force = 0.0, 0.0
+        if c:
+            radius = c.zone().extent       # the contact set is a disc around the axis
+            force = c.force()[1]
+        return {"center_uz": self._center(model.u)[1], "contact_radius": radius,
+                "rim_ur": self._rim(model.u)[0], "contact_force": force}
+
+
+SCENES: dict[str, type[Scene]] = {cls.name: cls for cls in (Beam, Plate, Elastica)}
+
+
+def get_scene(name: str, overrides: list[str] = ()) -> Scene:
+    """The scene called ``name`` with ``key=value`` overrides, validated."""
+    if name not in SCENES:
+        raise SceneError(f"unknown scene {name!r}: choose one of {', '.join(SCENES)}")
+    scene = SCENES[name]().with_overrides(list(overrides))
+    scene.validate()
+    return scene
+
+

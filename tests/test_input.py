@@ -1,0 +1,77 @@
+"""Bad input is refused with a message that names the value and the fix."""
+import pytest
+
+from comove_dolfinx import cli
+from comove_dolfinx.materials import Elastic, MaterialError
+from comove_dolfinx.scenes import SceneError, get_scene
+
+
+@pytest.mark.parametrize("pairs, words", [
+    (["nu=0.5"], ["nu", "0.5"]),
+    (["nu=0.7"], ["nu", "0.7"]),
+    (["E=-10"], ["E", "-10"]),
+    (["E=0"], ["E", "0"]),
+    (["update=jaumann"], ["jaumann", "sr"]),
+    (["size=0"], ["size"]),
+    (["n_steps=0"], ["n_steps"]),
+    (["degree=3"], ["degree"]),
+    (["colour=red"], ["colour", "parameters"]),
+    (["lam"], ["key=value"]),
+    (["n_steps=ten"], ["n_steps", "int"]),
+])
+def test_bad_parameters(pairs, words):
+    with pytest.raises((SceneError, MaterialError)) as err:
+        get_scene("elastica", pairs)
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_unknown_scene():
+    with pytest.raises(SceneError, match="unknown scene 'bridge'.*beam"):
+        get_scene("bridge")
+
+
+def test_elastic_validation():
+    with pytest.raises(MaterialError, match="nu"):
+        Elastic(1000.0, 0.5)
+    with pytest.raises(MaterialError, match="E"):
+        Elastic(-1.0, 0.3)
+
+
+def test_cli_reports_bad_input_without_traceback(capsys, tmp_path):
+    code = cli.main(["run", "elastica", "--out", str(tmp_path), "--set", "nu=0.5"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "nu" in err and "Traceback" not in err
+    code = cli.main(["run", "nosuch", "--out", str(tmp_path)])
+    assert code == 2 and "unknown scene" in capsys.readouterr().err
+
+
+def test_cli_missing_mesh_and_missing_tags(capsys, tmp_path):
+    code = cli.main(["run", "beam", "--out", str(tmp_path / "o"), "--set",
+                     f"mesh={tmp_path / 'none.msh'}"])
+    assert code == 2 and "none.msh" in capsys.readouterr().err
+    # a mesh whose boundary carries no names: the beam needs left, top, bottom
+    import gmsh
+    path = tmp_path / "untagged.msh"
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("untagged")
+    s = gmsh.model.occ.addRectangle(0, 0, 0, 10, 0.5)
+    gmsh.model.occ.synchronize()
+    gmsh.model.addPhysicalGroup(2, [s], 1)
+    gmsh.model.setPhysicalName(2, 1, "body")
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+    gmsh.model.mesh.generate(2)
+    gmsh.write(str(path))
+    gmsh.finalize()
+    code = cli.main(["run", "beam", "--out", str(tmp_path / "o2"), "--set", f"mesh={path}"])
+    err = capsys.readouterr().err
+    assert code == 2 and "left" in err and "Traceback" not in err
+
+
+def test_scenes_listing(capsys):
+    assert cli.main(["scenes"]) == 0
+    out = capsys.readouterr().out
+    for word in ("elastica", "beam", "plate", "q_max", "p_max", "lam"):
+        assert word in out
