@@ -43,6 +43,7 @@ def _run(args) -> int:
         logging.disable(logging.NOTSET)
         logger = logging.getLogger("comove")
         logger.setLevel(logging.INFO)
+        logger.propagate = False           # the JIT libraries give the root logger a handler
         if MPI.COMM_WORLD.rank == 0:
             logger.addHandler(logging.StreamHandler(sys.stdout))
         logging.getLogger().setLevel(logging.WARNING)

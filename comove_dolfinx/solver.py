@@ -7,10 +7,13 @@ the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic ana
 Convergence: ||R|| <= rtol * R_scale + atol, with R_scale the largest initial residual norm of the
 increments so far (a force scale of the run), or a Newton correction ||du|| <= stol * ||u|| (the
 residual of a stiff body stalls at a round-off floor set by its internal forces, which can exceed
-rtol * R_scale when the load increments are small). Each Newton correction goes through a
-backtracking line search: it is halved (up to ``backtracks`` times) while it leads to an inadmissible
-iterate (det F <= 0, or an increment the S-R split cannot represent) or fails to lower ||R|| (which
-stops the active-set cycling of contact problems). An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
+rtol * R_scale when the load increments are small). Each Newton correction is halved (up to
+``backtracks`` times) while it leads to an inadmissible iterate (det F <= 0, or an increment the S-R
+split cannot represent). With contact terms, corrections after the first of an increment must also
+lower ||R|| (Armijo test on the residual norm), which stops the active-set and stick/slip cycling;
+without contact the test is off, because ||R|| is not monotone along a converging Newton path of a
+rotating slender body (the first corrections raise the axial residual by orders of magnitude).
+An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
 ``divergence`` over the increment's first fails the increment; the loop
 then restores the last converged state and halves the increment, up to ``max_cutbacks`` times in a
 row, then stops cleanly (every converged increment has already been handed to the callbacks).
@@ -64,7 +67,7 @@ class NewtonSettings:
     max_it: int = 25
     divergence: float = 1e12
     backtracks: int = 4
-    line_search: bool = True
+    line_search: bool | None = None   # None: on when the model has contact (boundary) terms
 
 
 class Newton:
@@ -83,6 +86,8 @@ class Newton:
         pc = self.ksp.getPC()
         pc.setType("lu")
         pc.setFactorSolverType("mumps")
+        self.line_search = (bool(model.boundary_terms) if self.settings.line_search is None
+                            else self.settings.line_search)
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
 
@@ -101,7 +106,7 @@ class Newton:
             b.scale(-1.0)
         return b.norm()
 
-    def _line_search(self, r_old: float):
+    def _line_search(self, r_old: float, armijo: bool = True):
         """Move u along the Newton correction du: the full step if it is admissible and lowers
         ||R||; otherwise halve it (up to ``backtracks`` times) until ||R|| <= (1 - 1e-4 alpha) r_old,
         keeping the best admissible step when none does. Returns (||R||, alpha, error or None)."""
@@ -119,7 +124,7 @@ class Newton:
                 continue
             if best is None or r < best[0]:
                 best = (r, alpha)
-            if not s.line_search or r <= (1.0 - 1e-4 * alpha) * r_old:
+            if not (self.line_search and armijo) or r <= (1.0 - 1e-4 * alpha) * r_old:
                 return r, alpha, None
             alpha *= 0.5
         if best is None:
@@ -149,7 +154,7 @@ class Newton:
                 self.ksp.solve(self.b, m.du.vector)
                 m.du.x.scatter_forward()
             dnorm = m.du.vector.norm()
-            rnorm, alpha, err = self._line_search(rnorm)
+            rnorm, alpha, err = self._line_search(rnorm, armijo=it > 1)
             if err is not None:
                 return False, it, str(err)
             if alpha < 1.0:
