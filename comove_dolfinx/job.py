@@ -31,8 +31,12 @@ def _print(comm, text: str) -> None:
 
 
 def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
-              newton: NewtonSettings | None = None) -> RunResult:
-    """Run ``scene`` and write its results into ``out_dir``; returns the solver's RunResult."""
+              newton: NewtonSettings | None = None, callbacks=()) -> RunResult:
+    """Run ``scene`` and write its results into ``out_dir``; returns the solver's RunResult.
+
+    ``callbacks``: extra ``f(scene, model, increment)`` called after each converged increment (after
+    the history row is written, before the state is committed), e.g. to take snapshots for plots.
+    """
     out = pathlib.Path(out_dir)
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
@@ -70,6 +74,8 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
                 stats["first_contact_load"] = row["load"]
         extra = ", ".join(f"{k} {row[k]:.5g}" for k in scene.columns)
         cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
+        for cb in callbacks:
+            cb(scene, m, inc)
         _print(comm, f"  step {inc.step:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
                      f"{extra}  ({inc.wall_s:.2f} s)")
 

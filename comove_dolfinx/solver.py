@@ -67,6 +67,7 @@ class NewtonSettings:
     max_it: int = 25
     divergence: float = 1e12
     backtracks: int = 4
+    free_its: int = 5              # corrections taken in full (unless inadmissible) before the Armijo test
     line_search: bool | None = None   # None: on when the model has contact (boundary) terms
 
 
@@ -154,7 +155,7 @@ class Newton:
                 self.ksp.solve(self.b, m.du.vector)
                 m.du.x.scatter_forward()
             dnorm = m.du.vector.norm()
-            rnorm, alpha, err = self._line_search(rnorm, armijo=it > 1)
+            rnorm, alpha, err = self._line_search(rnorm, armijo=it > s.free_its)
             if err is not None:
                 return False, it, str(err)
             if alpha < 1.0:
@@ -177,7 +178,7 @@ class StepSettings:
     n_steps: int = 20
     t_end: float = 1.0
     max_cutbacks: int = 6
-    easy_its: int = 4
+    easy_its: int = 6
     grow_after: int = 2
     predictor: bool = False        # secant extrapolation; hurts thin rotating bodies (axial stretch)
 
