@@ -60,7 +60,7 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
     xdmf = XDMFOutput(out / "results.xdmf", model, extra)
     stats = {"first_contact_load": None, "max_penetration": 0.0}
     _print(comm, f"{scene.name}: {model.num_dofs()} dofs, {md.mesh.topology.index_map(2).size_global}"
-                 f" cells, {scene.kind}, update {scene.update}, {scene.n_steps} increments nominal")
+                 f" cells, {model.kin.model}, update {scene.update}, {scene.n_steps} increments nominal")
 
     def record(m, inc):
         row = {"step": inc.step, "load": inc.load * scene.load_max, **scene.history_row(m),
@@ -81,7 +81,7 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
 
     solver = IncrementalSolver(model, StepSettings(n_steps=scene.n_steps,
                                                    max_cutbacks=scene.max_cutbacks),
-                               newton, timer)
+                               newton or scene.newton_settings(), timer)
     bar = tqdm(total=1.0, unit="load", disable=not progress or comm.rank != 0,
                bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
     try:

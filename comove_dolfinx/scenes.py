@@ -12,11 +12,14 @@ import dataclasses
 from dataclasses import dataclass
 from typing import ClassVar
 
+from mpi4py import MPI
+
 from . import geometry
 from .contact import METHODS, Contact, Plane
-from .materials import Elastic
-from .model import Model
+from .materials import Elastic, Hardening
+from .model import Model, Plasticity
 from .output import Probe
+from .solver import NewtonSettings
 from .updates import UPDATES
 
 COMMON_COLUMNS = ("newton_its", "wall_s")
@@ -128,6 +131,10 @@ class Scene:
         """The contact terms of the built model (none for a scene without obstacles)."""
         return []
 
+    def newton_settings(self) -> NewtonSettings:
+        """Newton settings of the scene (the solver's defaults unless a scene needs others)."""
+        return NewtonSettings()
+
 
 def _convert(key: str, text: str, typ):
     try:
@@ -218,8 +225,8 @@ class ContactScene(Scene):
             raise SceneError(f"gamma0 = {self.gamma0} must be > 0")
         if self.theta not in (1, 0, -1):
             raise SceneError(f"theta = {self.theta}: use 1, 0 or -1")
-        if not self.gap > 0:
-            raise SceneError(f"gap = {self.gap}: the obstacle must start clear of the body (gap > 0)")
+        if not self.gap >= 0:
+            raise SceneError(f"gap = {self.gap}: the obstacle must not start inside the body (gap >= 0)")
 
     def contacts(self) -> list:
         term = getattr(self, "contact_term", None)
@@ -340,7 +347,119 @@ class Plate(ContactScene):
                 "rim_ur": self._rim(model.u)[0], "contact_force": force}
 
 
-SCENES: dict[str, type[Scene]] = {cls.name: cls for cls in (Beam, Plate, Elastica)}
+# Representative mild steel of scenes.md: equivalent plastic strain -> yield stress [kgf/cm^2]
+RING_HARDENING = "0:2800, 0.01:3000, 0.05:3600, 0.1:4000, 0.2:4500, 0.5:5300"
+
+
+def parse_table(text: str) -> Hardening:
+    """A hardening table written ``p0:s0, p1:s1, ...`` (flat beyond the last point)."""
+    try:
+        pairs = [item.split(":") for item in text.replace(";", ",").split(",") if item.strip()]
+        strain, stress = zip(*[(float(a), float(b)) for a, b in pairs])
+    except ValueError:
+        raise SceneError(f"hardening = {text!r}: write the table as strain:stress pairs separated "
+                         "by commas, e.g. 0:2800,0.01:3000") from None
+    return Hardening(strain, stress)
+
+
+@dataclass
+class Ring(ContactScene):
+    """Metal ring crushed between rigid plates (quarter, plane strain, elastic-plastic; scenes.md).
+
+    The quarter x, y >= 0 carries u_x = 0 on x = 0 and u_y = 0 on y = 0 (the lower plate's half of
+    the crush is taken by symmetry); the upper plate starts tangent at the crown (0, R_out) and moves
+    down by delta / 2. History: P = 2 x (vertical force on the quarter) per unit axial length,
+    contact_width = 2 x (contact length on the quarter) across the whole plate, crown_gap = distance
+    between the crown and the plate (> 0 once the crown lifts off and contact splits into two zones).
+    """
+
+    name: ClassVar[str] = "ring"
+    summary: ClassVar[str] = ("ring OD 11.43, wall 0.866 (quarter, plane strain, J2 mild steel) "
+                              "crushed between rigid plates to delta = 6.6, mu = 0.1")
+    kind: ClassVar[str] = "plane_strain"
+    columns: ClassVar[tuple[str, ...]] = ("force", "contact_width", "crown_gap", "max_plastic_strain")
+    doc: ClassVar[dict[str, str]] = {
+        **ContactScene.doc, "gap": "initial gap between the crown and the upper plate [cm]",
+        "R_out": "outer radius [cm]", "wall": "wall thickness [cm]",
+        "delta_max": "final approach of the two plates [cm]",
+        "hardening": "yield stress table p:sigma_y [kgf/cm^2], flat beyond the last point",
+        "law": "plasticity: j2 (return mapping) or chen (Chen's single-parameter law)",
+        "plane": "plane_strain or plane_stress"}
+
+    E: float = 1.89e6
+    nu: float = 0.3
+    size: float = 0.22
+    n_steps: int = 30
+    gap: float = 0.0
+    gamma0: float = 1.0
+    R_out: float = 5.715
+    wall: float = 0.866
+    delta_max: float = 6.6
+    hardening: str = RING_HARDENING
+    law: str = "j2"
+    plane: str = "plane_strain"
+
+    def validate(self):
+        super().validate()
+        if not (self.R_out > 0 and 0 < self.wall < self.R_out):
+            raise SceneError(f"R_out = {self.R_out}, wall = {self.wall}: need 0 < wall < R_out")
+        if not self.delta_max > 0:
+            raise SceneError(f"delta_max = {self.delta_max} must be > 0")
+        if self.law not in ("j2", "chen"):
+            raise SceneError(f"law = {self.law!r}: choose j2 or chen")
+        if self.plane not in ("plane_strain", "plane_stress"):
+            raise SceneError(f"plane = {self.plane!r}: choose plane_strain or plane_stress")
+        if self.update not in ("sr", "hughes_winget"):
+            raise SceneError(f"update = {self.update!r} cannot carry plasticity: use sr or hughes_winget")
+        self.table()
+
+    def table(self) -> Hardening:
+        return parse_table(self.hardening)
+
+    def newton_settings(self) -> NewtonSettings:
+        # Plastic hinges under a spreading contact zone: a correction that raises ||R|| is damped
+        # from the second iteration on (measured to delta = 2: 74-88 increments against 231).
+        return NewtonSettings(free_its=1)
+
+    def mesh_data(self, comm):
+        need = ("xsym", "ysym", "outer")
+        if self.mesh:
+            return self.load_msh(comm, need)
+        return geometry.annulus_sector(self.R_out - self.wall, self.R_out, self.size,
+                                       order=self.geometry_order, comm=comm)
+
+    @property
+    def load_max(self):
+        return self.delta_max
+
+    def build_model(self, md):
+        m = Model(md, self.plane, self.elastic(), update=self.update, degree=self.degree,
+                  plasticity=Plasticity(self.table(), self.law))
+        m.fix("xsym", component=0)
+        m.fix("ysym", component=1)
+        plate = Plane((0.0, self.R_out + self.gap), (0.0, -1.0),
+                      motion=(0.0, -0.5 * self.delta_max))
+        self._plate = plate
+        self.contact_term = self.add_contact(m, "outer", plate)
+        self._crown = Probe(m.V, (0.0, self.R_out))
+        return m
+
+    def history_row(self, model):
+        c = self.contact_term
+        force = width = 0.0
+        if c:
+            force = -2.0 * c.force()[1]            # the plate pushes the quarter down
+            width = 2.0 * c.zone().extent
+        uy = self._crown(model.u)[1]
+        plate_y = self.R_out + self.gap - 0.5 * self.delta_max * model.load
+        crown_gap = plate_y - (self.R_out + uy)
+        p = model.p.x.array
+        pmax = model.comm.allreduce(float(p.max()) if p.size else 0.0, op=MPI.MAX)
+        return {"force": force, "contact_width": width, "crown_gap": crown_gap,
+                "max_plastic_strain": pmax}
+
+
+SCENES: dict[str, type[Scene]] = {cls.name: cls for cls in (Beam, Plate, Ring, Elastica)}
 
 
 def get_scene(name: str, overrides: list[str] = ()) -> Scene:

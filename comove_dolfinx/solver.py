@@ -178,8 +178,8 @@ class StepSettings:
     n_steps: int = 20
     t_end: float = 1.0
     max_cutbacks: int = 6
-    easy_its: int = 6
-    grow_after: int = 2
+    easy_its: int = 8
+    grow_after: int = 1
     predictor: bool = False        # secant extrapolation; hurts thin rotating bodies (axial stretch)
 
 
