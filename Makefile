@@ -53,7 +53,7 @@ test: venv
 	$(MPIRUN) $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
 
 bench: venv
-	$(PY) -m comove_dolfinx.bench --out results/bench
+	$(PY) -m comove_dolfinx.bench all --out results/bench
 
 clean:
 	rm -rf $(VENV) results .pytest_cache
