@@ -45,7 +45,8 @@ result = run_scene(scene, out, callbacks=[snaps])
 # and the gap at the crown, which opens when the contact zone splits in two.
 #
 # Known artefact (open): the force curve shows single-increment drops of 3-10 % where the contact
-# zone on the flattened crown jumps by a facet (seen at mesh sizes 0.44, 0.22 and 0.11).
+# zone on the flattened crown jumps by a facet (seen at mesh sizes 0.44, 0.22 and 0.11); they come
+# from the friction (none with `--set mu=0`).
 
 # %%
 if MPI.COMM_WORLD.rank == 0:
