@@ -149,6 +149,19 @@ def _convert(key: str, text: str, typ):
         raise SceneError(f"{key}={text!r} is not a valid {typ.__name__}") from None
 
 
+
+def _check_strip(scene) -> None:
+    if not (scene.L > 0 and scene.h > 0):
+        raise SceneError(f"L = {scene.L}, h = {scene.h}: both must be > 0")
+
+
+def _strip_mesh(scene, comm, need):
+    """The L x h rectangle of the cantilever scenes, or the user's mesh with the ``need`` tags."""
+    if scene.mesh:
+        return scene.load_msh(comm, need)
+    return geometry.rectangle(scene.L, scene.h, scene.size, order=scene.geometry_order, comm=comm)
+
+
 # ------------------------------------------------------------------------------------------------
 @dataclass
 class Elastica(Scene):
@@ -169,14 +182,10 @@ class Elastica(Scene):
 
     def validate(self):
         super().validate()
-        if not (self.L > 0 and self.h > 0):
-            raise SceneError(f"L = {self.L}, h = {self.h}: both must be > 0")
+        _check_strip(self)
 
     def mesh_data(self, comm):
-        need = ("left", "right")
-        if self.mesh:
-            return self.load_msh(comm, need)
-        return geometry.rectangle(self.L, self.h, self.size, order=self.geometry_order, comm=comm)
+        return _strip_mesh(self, comm, ("left", "right"))
 
     @property
     def load_max(self):
@@ -261,14 +270,10 @@ class Beam(ContactScene):
 
     def validate(self):
         super().validate()
-        if not (self.L > 0 and self.h > 0):
-            raise SceneError(f"L = {self.L}, h = {self.h}: both must be > 0")
+        _check_strip(self)
 
     def mesh_data(self, comm):
-        need = ("left", "top", "bottom")
-        if self.mesh:
-            return self.load_msh(comm, need)
-        return geometry.rectangle(self.L, self.h, self.size, order=self.geometry_order, comm=comm)
+        return _strip_mesh(self, comm, ("left", "top", "bottom"))
 
     @property
     def load_max(self):
