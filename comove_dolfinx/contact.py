@@ -13,8 +13,10 @@ Conventions (theory.md section 5)
       R_n = -(theta/gamma) int p(u) p'(u; v) + (1/gamma) int [p(u) - gamma g]_+ (theta p'(u; v) - gamma n_o.v)
   which reduces to the exact traction term -int p n_o.v whenever p = [p - gamma g]_+.
 * Friction, Coulomb with the pressure lagged (Shang & Chen's scheme): the slip threshold s = mu p_lag
-  uses the pressure of a lag state u_lag (the last converged increment, or the last pass within the
-  increment when ``relag`` asks for true Coulomb). Slip increment ds = t_o . ((u - u_n) - (d - d_n))
+  uses the pressure of a lag state (u_lag, d_lag): the body and the obstacle as they stood at the last
+  converged increment, or at the last pass within the increment when ``relag`` asks for true Coulomb.
+  (The obstacle must be taken where it stood: the body's old position against the obstacle's new one
+  would read the increment's whole approach as pressure.) Slip increment ds = t_o . ((u - u_n) - (d - d_n))
   relative to the obstacle's own motion d. With P_s(x) = x for |x| <= s, s sign(x) otherwise:
       penalty:  q = -P_s(gamma (e_n + ds)),   R_t = int P_s(gamma (e_n + ds)) t_o.v
                 e_n, the elastic (stick) part of the tangential slip, is the friction history: a
@@ -72,11 +74,12 @@ class Obstacle:
     def set_load(self, t: float) -> None:
         self._d.value = self.displacement(t)
 
-    # UFL (current position x) and NumPy (positions (N, 2), load factor t) versions
-    def gap(self, x):  # pragma: no cover - interface
+    # UFL (current position x; d the obstacle's displacement, default the current one) and NumPy
+    # (positions (N, 2), load factor t) versions
+    def gap(self, x, d=None):  # pragma: no cover - interface
         raise NotImplementedError
 
-    def normal(self, x):  # pragma: no cover - interface
+    def normal(self, x, d=None):  # pragma: no cover - interface
         raise NotImplementedError
 
     def gap_np(self, x: np.ndarray, t: float) -> np.ndarray:  # pragma: no cover - interface
@@ -94,10 +97,11 @@ class Plane(Obstacle):
             raise ContactError("the plane's normal must not be zero")
         self.n = n / np.linalg.norm(n)
 
-    def gap(self, x):
-        return ufl.dot(x - ufl.as_vector(self.point) - self._d, ufl.as_vector(self.n))
+    def gap(self, x, d=None):
+        d = self._d if d is None else d
+        return ufl.dot(x - ufl.as_vector(self.point) - d, ufl.as_vector(self.n))
 
-    def normal(self, x):
+    def normal(self, x, d=None):
         return ufl.as_vector(self.n)
 
     def gap_np(self, x, t):
@@ -114,15 +118,15 @@ class Circle(Obstacle):
         self.center = np.asarray(center, dtype=float)
         self.radius = float(radius)
 
-    def _rel(self, x):
-        return x - ufl.as_vector(self.center) - self._d
+    def _rel(self, x, d):
+        return x - ufl.as_vector(self.center) - (self._d if d is None else d)
 
-    def gap(self, x):
-        r = self._rel(x)
+    def gap(self, x, d=None):
+        r = self._rel(x, d)
         return ufl.sqrt(ufl.dot(r, r)) - self.radius
 
-    def normal(self, x):
-        r = self._rel(x)
+    def normal(self, x, d=None):
+        r = self._rel(x, d)
         return r / ufl.sqrt(ufl.dot(r, r))
 
     def gap_np(self, x, t):
@@ -193,7 +197,9 @@ class Contact:
         msh = model.mesh
         self.model = model
         self.obstacle.bind(msh)
-        self._d_n = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))
+        self._d_n = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))     # obstacle at the last increment
+        self._d_lag = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))   # obstacle in the lag state
+        self._d_n.value = self._d_lag.value = self.obstacle.displacement(self.t_n)
         tdim = msh.topology.dim
         DG0 = fem.FunctionSpace(msh, ("DG", 0))
         self.h = fem.Function(DG0, name="cell_size")
@@ -227,14 +233,15 @@ class Contact:
         R = Rn
         self.q_ref = None
         if self.mu > 0:
-            x_lag = model.x + self.u_lag
-            g_lag = self.obstacle.gap(x_lag)
+            # the lag state: the body at u_lag against the obstacle where it stood then (d_lag)
+            x_lag, d_lag = model.x + self.u_lag, self._d_lag
+            g_lag = self.obstacle.gap(x_lag, d_lag)
             if self.method == "penalty":
                 p_lag = gamma * _pos(-g_lag)
             else:
                 N = ufl.FacetNormal(msh)
-                p_lag = _pos(ufl.dot(self.obstacle.normal(x_lag), model.nominal_traction(N, self.u_lag))
-                             - gamma * g_lag)
+                p_lag = _pos(ufl.dot(self.obstacle.normal(x_lag, d_lag),
+                                     model.nominal_traction(N, self.u_lag)) - gamma * g_lag)
             s = self.mu * p_lag
             slip = ufl.dot(t_o, (u - u_n) - (self.obstacle._d - self._d_n))
             if self.method == "penalty":
@@ -268,10 +275,12 @@ class Contact:
             self.e_n.x.scatter_forward()
         self.t_n = self.t
         self._d_n.value = self.obstacle.displacement(self.t)
+        self._d_lag.value = self._d_n.value
         self.u_lag.x.array[:] = model.u.x.array
 
     def restore(self, model) -> None:
         self.u_lag.x.array[:] = model.u_n.x.array
+        self._d_lag.value = self._d_n.value
 
     def relag_pass(self, model) -> bool:
         """True Coulomb: take the threshold from the current solution; True if it changed notably."""
@@ -279,6 +288,7 @@ class Contact:
             return False
         p_old = self._assemble_vec(self._p_lag_form)
         self.u_lag.x.array[:] = model.u.x.array
+        self._d_lag.value = self.obstacle.displacement(self.t)
         p_new = self._assemble_vec(self._p_lag_form)
         scale = max(np.abs(p_new).max(), 1e-300)
         change = model.comm.allreduce(float(np.abs(p_new - p_old).max()) / scale, op=MPI.MAX)

@@ -31,9 +31,11 @@ def _print(comm, text: str) -> None:
 
 
 def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
-              newton: NewtonSettings | None = None, callbacks=()) -> RunResult:
+              newton: NewtonSettings | None = None, callbacks=(),
+              steps: StepSettings | None = None) -> RunResult:
     """Run ``scene`` and write its results into ``out_dir``; returns the solver's RunResult.
 
+    ``newton``, ``steps``: solver settings instead of the scene's own.
     ``callbacks``: extra ``f(scene, model, increment)`` called after each converged increment (after
     the history row is written, before the state is committed), e.g. to take snapshots for plots.
     """
@@ -79,8 +81,7 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
         _print(comm, f"  step {inc.step:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
                      f"{extra}  ({inc.wall_s:.2f} s)")
 
-    solver = IncrementalSolver(model, StepSettings(n_steps=scene.n_steps,
-                                                   max_cutbacks=scene.max_cutbacks),
+    solver = IncrementalSolver(model, steps or scene.step_settings(),
                                newton or scene.newton_settings(), timer)
     bar = tqdm(total=1.0, unit="load", disable=not progress or comm.rank != 0,
                bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")

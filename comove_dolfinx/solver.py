@@ -68,7 +68,10 @@ class NewtonSettings:
     divergence: float = 1e12
     backtracks: int = 4
     free_its: int = 5              # corrections taken in full (unless inadmissible) before the Armijo test
-    line_search: bool | None = None   # None: on when the model has contact (boundary) terms
+    line_search: bool | str | None = None   # None: on when the model has contact (boundary) terms;
+                                            # True/"residual": Armijo on ||R||; "energy": du.R(u + a du)
+    energy_eta: float = 0.8
+    accept_growth: float = 0.0     # energy search: take the full step if ||R|| <= this x ||R_old||        # energy search: accept a step once |du.R| <= eta |du.R(u)|
 
 
 class Newton:
@@ -87,8 +90,13 @@ class Newton:
         pc = self.ksp.getPC()
         pc.setType("lu")
         pc.setFactorSolverType("mumps")
-        self.line_search = (bool(model.boundary_terms) if self.settings.line_search is None
-                            else self.settings.line_search)
+        ls = self.settings.line_search
+        if ls is None:
+            ls = bool(model.boundary_terms)
+        self.line_search = {True: "residual", False: None}.get(ls, ls)
+        if self.line_search not in (None, "residual", "energy"):
+            raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")
+        self._b_old = self.b.duplicate()
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
 
@@ -135,6 +143,47 @@ class Newton:
         m.u.x.array[:] = u0 + alpha * du
         return self.residual(), alpha, None
 
+    def _energy_search(self, r_old: float):
+        """Crisfield's line search on s(a) = du . R(u + a du), s(0) < 0 along a descent direction:
+        the full step if |s(1)| <= eta |s(0)| or s(1) still has the sign of s(0) (no extrapolation);
+        otherwise regula falsi on the bracket of the sign change (at most ``backtracks`` more
+        trials), keeping the trial of smallest |s|. An inadmissible trial is halved.
+        Returns (||R||, alpha, error or None)."""
+        m, st = self.model, self.settings
+        du = m.du.x.array
+        u0 = m.u.x.array.copy()
+        s0 = -self._b_old.dot(m.du.vector)           # b = -R
+        lo, hi = (0.0, s0), None
+        alpha, err, best = 1.0, None, None
+        for _ in range(st.backtracks + 1):
+            m.u.x.array[:] = u0 + alpha * du
+            try:
+                r = self.residual()
+            except (InvertedElement, ReturnMapFailure) as e:
+                err = e
+                hi = None
+                alpha = 0.5 * (lo[0] + alpha)
+                continue
+            s1 = -self.b.dot(m.du.vector)
+            if best is None or abs(s1) < best[0]:
+                best = (abs(s1), alpha, r)
+            if (alpha == 1.0 and r <= st.accept_growth * r_old) or abs(s1) <= st.energy_eta * abs(s0) \
+                    or (s1 * s0 > 0 and hi is None):
+                return r, alpha, None
+            if s1 * s0 > 0:
+                lo = (alpha, s1)
+            else:
+                hi = (alpha, s1)
+            a = lo[0] + (hi[0] - lo[0]) * lo[1] / (lo[1] - hi[1])
+            width = hi[0] - lo[0]
+            alpha = min(max(a, lo[0] + 0.1 * width), hi[0] - 0.1 * width)
+        if best is None:
+            m.u.x.array[:] = u0
+            return r_old, 0.0, err
+        _, alpha, r = best
+        m.u.x.array[:] = u0 + alpha * du
+        return self.residual(), alpha, None
+
     def solve(self) -> tuple[bool, int, str]:
         """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""
         m, s = self.model, self.settings
@@ -155,7 +204,11 @@ class Newton:
                 self.ksp.solve(self.b, m.du.vector)
                 m.du.x.scatter_forward()
             dnorm = m.du.vector.norm()
-            rnorm, alpha, err = self._line_search(rnorm, armijo=it > s.free_its)
+            if self.line_search == "energy":
+                self.b.copy(self._b_old)
+                rnorm, alpha, err = self._energy_search(rnorm)
+            else:
+                rnorm, alpha, err = self._line_search(rnorm, armijo=it > s.free_its)
             if err is not None:
                 return False, it, str(err)
             if alpha < 1.0:
@@ -165,10 +218,22 @@ class Newton:
                      rnorm / max(self.residual_scale, 1e-300), dnorm)
             if not np.isfinite(rnorm) or rnorm > s.divergence * max(r0, s.atol):
                 return False, it, f"diverged (|R| = {rnorm:.3e})"
-            if dnorm <= s.stol * m.u.vector.norm():
+            if alpha == 1.0 and dnorm <= s.stol * m.u.vector.norm():
                 return True, it, "converged"
         converged = rnorm <= s.rtol * self.residual_scale + s.atol
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
+
+
+def _extrapolate(points, t: float) -> np.ndarray:
+    """Lagrange extrapolation of the converged states ``points`` = [(t_i, u_i)] to load t."""
+    out = np.zeros_like(points[0][1])
+    for i, (ti, ui) in enumerate(points):
+        w = 1.0
+        for j, (tj, _) in enumerate(points):
+            if j != i:
+                w *= (t - tj) / (ti - tj)
+        out += w * ui
+    return out
 
 
 @dataclass
@@ -180,7 +245,8 @@ class StepSettings:
     max_cutbacks: int = 6
     easy_its: int = 8
     grow_after: int = 1
-    predictor: bool = False        # secant extrapolation; hurts thin rotating bodies (axial stretch)
+    predictor: bool | int = False  # extrapolate the start of an increment from the converged ones:
+                                   # True or 1 linear, 2 quadratic; hurts thin rotating bodies
 
 
 @dataclass
@@ -227,8 +293,8 @@ class IncrementalSolver:
         m, st = self.model, self.steps
         dt_nom = st.t_end / st.n_steps
         dt, t, step, cut, easy = dt_nom, 0.0, 0, 0, 0
-        u_prev = m.u.x.array.copy()
-        dt_prev = None
+        past = [(0.0, m.u.x.array.copy())]          # converged (load, u), newest last
+        order = int(st.predictor)
         result = RunResult()
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
@@ -236,8 +302,8 @@ class IncrementalSolver:
             dt = min(dt, st.t_end - t)
             t_try = t + dt
             m.set_load(t_try)
-            if st.predictor and dt_prev:
-                m.u.x.array[:] = m.u_n.x.array + (dt / dt_prev) * (m.u_n.x.array - u_prev)
+            if order and len(past) > 1:
+                m.u.x.array[:] = _extrapolate(past[-(order + 1):], t_try)
             ok, its, reason = self.newton.solve()
             passes = 1
             while ok and passes < self.max_passes and any([term.relag_pass(m) for term in
@@ -258,15 +324,15 @@ class IncrementalSolver:
                 dt *= 0.5
                 easy = 0
                 continue
-            dt_prev, t, step = dt, t_try, step + 1
+            t, step = t_try, step + 1
             inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its)
             result.increments.append(inc)
             cut, failed_its = 0, 0
             with self.timer("output"):            # before commit: the increment is still visible
                 for cb in callbacks:
                     cb(m, inc)
-            u_prev[:] = m.u_n.x.array
             m.commit()
+            past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
             if progress is not None:
                 progress.update(dt)
             t_mark = time.perf_counter()

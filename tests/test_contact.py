@@ -132,6 +132,28 @@ def test_friction_stick_and_slip(block):
 
 @pytest.mark.mpi
 @pytest.mark.parametrize("method", ["penalty", "nitsche"])
+def test_lagged_friction_with_a_moving_obstacle(block, method):
+    """The floor rises under the block (top held in y) while the right face is pulled far: the
+    block slides, and with the pressure lagged the friction is mu times the normal force of the
+    previous increment, whatever the floor did since. (Reading the lag state's body against the
+    floor's new position would count the whole rise of an increment as pressure.)"""
+    mu = 0.3
+    m = Model(block, "plane_stress", Elastic(E, NU))
+    m.fix("top", component=1)
+    m.fix("right", component=0, value=lambda t: 0.05 * max(0.0, 2 * t - 1))
+    c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0), motion=(0.0, 0.01)), method=method, mu=mu,
+                gamma0=100.0 if method == "penalty" else 10.0)
+    m.boundary_terms.append(c)
+    forces = []
+    _solve(m, 8, [lambda m, inc: forces.append(c.force())])
+    normal = [f[1] for f in forces]
+    assert all(b > a > 0 for a, b in zip(normal, normal[1:]))      # pressed harder each increment
+    for prev, now in zip(forces[5:], forces[6:]):                  # sliding increments
+        assert -now[0] == pytest.approx(mu * prev[1], rel=1e-3)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("method", ["penalty", "nitsche"])
 def test_cantilever_lift_off_length(tmp_path_factory, method):
     """Thin cantilever clamped at height d over a flat, dead load q per length: it touches down at
     s = (72 E I d / q)^(1/4) from the clamp (small deflection, theory.md 7.4) with a reaction q s/3

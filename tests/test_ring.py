@@ -17,6 +17,7 @@ def _history(path):
 
 
 def _ring_constants(scene, plane_strain=True):
+    """(thin-ring elastic slope, collapse load P0, mean diameter)."""
     t = scene.wall
     R = scene.R_out - t / 2                       # mean radius
     E = scene.E / (1 - scene.nu ** 2) if plane_strain else scene.E
@@ -26,18 +27,34 @@ def _ring_constants(scene, plane_strain=True):
     return slope, 4 * mp / R, 2 * R
 
 
+def _thick_ring_slope(scene, plane_strain=True):
+    """P / delta of a ring under diametral loads with the axial and shear energies added to the
+    bending energy (Castigliano on the quarter, N = -(P/2) sin phi, V = (P/2) cos phi, M of theory.md
+    7.2; shear factor 6/5): delta / P = (pi/4 - 2/pi) R^3/(E I) + (pi/4) R/(E t) + (6/5)(pi/4) R/(G t).
+    At t/R = 0.16 the two extra terms soften the thin-ring value by 5 % (plane strain)."""
+    t = scene.wall
+    R = scene.R_out - t / 2
+    E = scene.E / (1 - scene.nu ** 2) if plane_strain else scene.E
+    G = scene.E / (2 * (1 + scene.nu))
+    c = (math.pi / 4 - 2 / math.pi) * R ** 3 / (E * t ** 3 / 12) + math.pi / 4 * R / (E * t) \
+        + 1.2 * math.pi / 4 * R / (G * t)
+    return 1.0 / c
+
+
 @pytest.mark.parametrize("plane", ["plane_strain", "plane_stress"])
-def test_initial_slope_matches_thin_ring(mpi_tmp, plane):
-    """A small approach, elastic: P / delta within 6 % of the thin-ring value (t/R = 0.16: shear and
-    curvature corrections of the thin-ring formula are of order (t/R)^2 and the plate's line contact
-    spreads the load over a small width)."""
+def test_initial_slope_matches_ring_theory(mpi_tmp, plane):
+    """A small approach, elastic: P / delta below the thin-ring value and within 3 % of the ring with
+    axial and shear compliance (measured -1.7 % / -1.9 %: the plates' local indentation is a further
+    compliance the ring formulas leave out)."""
     scene = get_scene("ring", [*COARSE, f"plane={plane}", "delta_max=0.01", "n_steps=1"])
     res = run_scene(scene, mpi_tmp / plane, progress=False)
     assert res.completed
     row = _history(mpi_tmp / plane)[-1]
     slope, _, _ = _ring_constants(scene, plane == "plane_strain")
     assert row["max_plastic_strain"] == 0.0
-    assert row["force"] / row["load"] == pytest.approx(slope, rel=0.06)
+    measured = row["force"] / row["load"]
+    assert measured < slope
+    assert measured == pytest.approx(_thick_ring_slope(scene, plane == "plane_strain"), rel=0.03)
 
 
 @pytest.mark.mpi
@@ -45,9 +62,8 @@ def test_knee_and_post_collapse_band(mpi_tmp):
     """Crushed to delta = 1.5: the force grows monotonically, bends over near the collapse load P0
     (the knee), and stays above the rigid-perfectly-plastic DeRunz-Hodge curve P0 / sqrt(1 - (delta/D)^2)
     (the mild steel hardens) but within 1.6 P0 of it up to delta = 1.5 (hardening to 3600 at 5 %).
-    Friction is re-lagged to true Coulomb: with the pressure lagged, the large first increments across
-    the knee overshoot the force by about 2 % (measured), which the next, smaller ones give back."""
-    scene = get_scene("ring", [*COARSE, "delta_max=1.5", "n_steps=6", "relag=true"])
+    Large increments (0.25) across the knee, with the friction pressure lagged (the paper's scheme)."""
+    scene = get_scene("ring", [*COARSE, "delta_max=1.5", "n_steps=6"])
     res = run_scene(scene, mpi_tmp, progress=False)
     assert res.completed
     rows = _history(mpi_tmp)
