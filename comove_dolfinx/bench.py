@@ -3,6 +3,7 @@
     python -m comove_dolfinx.bench elastica --out results/bench     # updates x increments
     python -m comove_dolfinx.bench contact  --out results/bench     # beam/plate: methods, gamma0
     python -m comove_dolfinx.bench ring     --out results/bench     # ring: mesh sizes
+    python -m comove_dolfinx.bench ring_steps --out results/bench   # ring: increments, friction lag
 
 Timings are wall-clock seconds, on whatever machine runs them; compare them within one run. The
 elastica study times the increment loop alone; the contact and ring studies run whole scenes through
@@ -99,7 +100,8 @@ def _its(info: dict) -> dict:
     its = info["newton_its"]
     return {"completed": int(info["completed"]), "increments": len(its),
             "newton_mean": sum(its) / len(its) if its else float("nan"),
-            "newton_max": max(its) if its else 0, "wall_s": info["wall_s"]}
+            "newton_max": max(its) if its else 0, "failed_its": info.get("failed_its", 0),
+            "wall_s": info["wall_s"]}
 
 
 CONTACT_VARIANTS = (("penalty", []), ("penalty_gamma0x10", ["gamma0=1000"]),
@@ -169,18 +171,42 @@ def ring(out: pathlib.Path, factors=(1.0, 0.5, 2.0)) -> list[dict]:
     return rows
 
 
+RING_STEPS = (10, 20, 30, 60, 120)
+
+
+def ring_steps(out: pathlib.Path, steps=RING_STEPS) -> list[dict]:
+    """Accuracy against cost for the ring: the whole crush in n nominal increments (friction
+    pressure lagged, the paper's scheme), each P(delta) compared with the finest run; and the
+    scene's default increments with the pressure re-lagged to true Coulomb (relag=true)."""
+    from .scenes import Ring
+    runs = [(f"lagged_n{n}", [f"n_steps={n}"]) for n in steps]
+    runs.append((f"coulomb_n{Ring.n_steps}", [f"n_steps={Ring.n_steps}", "relag=true"]))
+    results = {tag: _run("ring", sets, out, f"ring_{tag}") for tag, sets in runs}
+    ref = results[f"lagged_n{max(steps)}"][1]
+    rows = []
+    for tag, (info, hist) in results.items():
+        row = {"run": tag}
+        for d in RING_DELTAS:
+            P, P_ref = _at(hist, "force", d), _at(ref, "force", d)
+            row[f"P_at_{d:g}"] = P
+            row[f"dP_at_{d:g}_percent"] = 100 * (P / P_ref - 1)
+        rows.append({**row, **_its(info)})
+    _write_csv(out / "ring_increments.csv", rows)
+    return rows
+
+
 def main(argv=None) -> int:
     logging.disable(logging.INFO)
     p = argparse.ArgumentParser(prog="python -m comove_dolfinx.bench", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("study", choices=["elastica", "contact", "ring", "all"])
+    p.add_argument("study", choices=["elastica", "contact", "ring", "ring_steps", "all"])
     p.add_argument("--out", default="results/bench")
     args = p.parse_args(argv)
     out = pathlib.Path(args.out)
     if MPI.COMM_WORLD.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     MPI.COMM_WORLD.barrier()
-    studies = {"elastica": elastica, "contact": contact, "ring": ring}
+    studies = {"elastica": elastica, "contact": contact, "ring": ring, "ring_steps": ring_steps}
     for name in (list(studies) if args.study == "all" else [args.study]):
         rows = studies[name](out)
         if MPI.COMM_WORLD.rank == 0:

