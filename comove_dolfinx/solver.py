@@ -7,12 +7,17 @@ the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic ana
 Convergence: ||R|| <= rtol * R_scale + atol, with R_scale the largest initial residual norm of the
 increments so far (a force scale of the run), or a Newton correction ||du|| <= stol * ||u|| (the
 residual of a stiff body stalls at a round-off floor set by its internal forces, which can exceed
-rtol * R_scale when the load increments are small). Each Newton correction is halved (up to
-``backtracks`` times) while it leads to an inadmissible iterate (det F <= 0, or an increment the S-R
-split cannot represent). With contact terms, corrections after the first of an increment must also
-lower ||R|| (Armijo test on the residual norm), which stops the active-set and stick/slip cycling;
-without contact the test is off, because ||R|| is not monotone along a converging Newton path of a
-rotating slender body (the first corrections raise the axial residual by orders of magnitude).
+rtol * R_scale when the load increments are small; only a full step counts). Each Newton correction
+is halved (up to ``backtracks`` times) while it leads to an inadmissible iterate (det F <= 0, or an
+increment the S-R split cannot represent). Line search (``line_search``): with contact terms by
+default, corrections after the first ``free_its`` of an increment must also lower ||R|| (Armijo test
+on the residual norm), which stops the active-set and stick/slip cycling; without contact it is off,
+because ||R|| is not monotone along a converging Newton path of a rotating slender body (the first
+corrections raise the axial residual by orders of magnitude). "energy" is Crisfield's search for the
+root of du . R(u + a du) along the correction (regula falsi), for bodies whose corrections overshoot
+(plastic hinges; Crisfield, Non-linear Finite Element Analysis of Solids and Structures, vol. 1, 9.3).
+An increment starts from the last converged state, or with ``predictor`` from the Lagrange
+extrapolation (linear or quadratic in the load factor) of the last converged states.
 An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
 ``divergence`` over the increment's first fails the increment; the loop
 then restores the last converged state and halves the increment, up to ``max_cutbacks`` times in a

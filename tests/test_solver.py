@@ -1,0 +1,45 @@
+"""Increment control and Newton globalisation: the predictor's extrapolation, the energy line search."""
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from comove_dolfinx.scenes import get_scene
+from comove_dolfinx.solver import IncrementalSolver, Newton, NewtonSettings, StepSettings, _extrapolate
+
+# lam = 2 of the inextensible elastica (theory.md 7.1): v/L
+ELASTICA_2 = 0.49346
+
+
+def test_extrapolation_reproduces_polynomial_paths():
+    """Lagrange extrapolation through n + 1 states is exact for paths of degree n (unequal steps)."""
+    a, b, c = np.array([1.0, -2.0]), np.array([0.5, 3.0]), np.array([-4.0, 0.25])
+    linear = lambda t: a + b * t                      # noqa: E731
+    quadratic = lambda t: a + b * t + c * t ** 2      # noqa: E731
+    ts = [0.1, 0.25, 0.3]
+    assert np.allclose(_extrapolate([(t, linear(t)) for t in ts[1:]], 0.42), linear(0.42))
+    assert np.allclose(_extrapolate([(t, quadratic(t)) for t in ts], 0.42), quadratic(0.42))
+    # and a quadratic path is not reproduced by the linear predictor
+    assert not np.allclose(_extrapolate([(t, quadratic(t)) for t in ts[1:]], 0.42), quadratic(0.42))
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("predictor", [0, 1])
+def test_energy_line_search_reaches_the_elastica(predictor):
+    """The globalisation changes the path of the iterations, not the solution: with Crisfield's line
+    search (and the linear predictor) the elastica still lands on the closed form at lam = 2."""
+    scene = get_scene("elastica", ["lam=2", "n_steps=10"])
+    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    model.finalize()
+    res = IncrementalSolver(model, StepSettings(n_steps=10, predictor=predictor),
+                            NewtonSettings(line_search="energy")).run()
+    assert res.completed, res.message
+    v = -scene.history_row(model)["tip_uy"] / scene.L
+    assert v == pytest.approx(ELASTICA_2, rel=5e-3)
+
+
+def test_unknown_line_search_is_refused():
+    scene = get_scene("elastica", ["n_steps=1"])
+    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    model.finalize()
+    with pytest.raises(ValueError, match="'bogus'"):
+        Newton(model, NewtonSettings(line_search="bogus"))
