@@ -177,10 +177,14 @@ RING_STEPS = (10, 20, 30, 60, 120)
 def ring_steps(out: pathlib.Path, steps=RING_STEPS) -> list[dict]:
     """Accuracy against cost for the ring: the whole crush in n nominal increments (friction
     pressure lagged, the paper's scheme), each P(delta) compared with the finest run; and the
-    scene's default increments with the pressure re-lagged to true Coulomb (relag=true)."""
+    scene's default increments with the pressure re-lagged to true Coulomb (relag=true); and Chen's
+    single-parameter rate law (law=chen) at 1, 4 and 16 times the default increments, against the
+    same J2 reference."""
     from .scenes import Ring
     runs = [(f"lagged_n{n}", [f"n_steps={n}"]) for n in steps]
     runs.append((f"coulomb_n{Ring.n_steps}", [f"n_steps={Ring.n_steps}", "relag=true"]))
+    runs += [(f"chen_n{k * Ring.n_steps}", [f"n_steps={k * Ring.n_steps}", "law=chen"])
+             for k in (1, 4, 16)]
     results = {tag: _run("ring", sets, out, f"ring_{tag}") for tag, sets in runs}
     ref = results[f"lagged_n{max(steps)}"][1]
     rows = []
