@@ -75,8 +75,7 @@ class NewtonSettings:
     free_its: int = 5              # corrections taken in full (unless inadmissible) before the Armijo test
     line_search: bool | str | None = None   # None: on when the model has contact (boundary) terms;
                                             # True/"residual": Armijo on ||R||; "energy": du.R(u + a du)
-    energy_eta: float = 0.8
-    accept_growth: float = 0.0     # energy search: take the full step if ||R|| <= this x ||R_old||        # energy search: accept a step once |du.R| <= eta |du.R(u)|
+    energy_eta: float = 0.8        # energy search: accept a step once |du.R| <= eta |du.R(u)|
 
 
 class Newton:
@@ -120,33 +119,40 @@ class Newton:
             b.scale(-1.0)
         return b.norm()
 
+    def _trial(self, u0: np.ndarray, alpha: float):
+        """u = u0 + alpha du and its ||R||; (None, error) if the iterate is inadmissible."""
+        m = self.model
+        m.u.x.array[:] = u0 + alpha * m.du.x.array
+        try:
+            return self.residual(), None
+        except (InvertedElement, ReturnMapFailure) as e:
+            return None, e
+
+    def _settle(self, u0: np.ndarray, alpha: float | None, r_old: float, err):
+        """End a search on the chosen step (or back at u0 when no trial was admissible)."""
+        if alpha is None:
+            self.model.u.x.array[:] = u0
+            return r_old, 0.0, err
+        r, _ = self._trial(u0, alpha)
+        return r, alpha, None
+
     def _line_search(self, r_old: float, armijo: bool = True):
         """Move u along the Newton correction du: the full step if it is admissible and lowers
         ||R||; otherwise halve it (up to ``backtracks`` times) until ||R|| <= (1 - 1e-4 alpha) r_old,
         keeping the best admissible step when none does. Returns (||R||, alpha, error or None)."""
-        m, s = self.model, self.settings
-        du = m.du.x.array
-        u0 = m.u.x.array.copy()
+        u0 = self.model.u.x.array.copy()
         best, alpha, err = None, 1.0, None
-        for _ in range(s.backtracks + 1):
-            m.u.x.array[:] = u0 + alpha * du
-            try:
-                r = self.residual()
-            except (InvertedElement, ReturnMapFailure) as e:
-                err = e
-                alpha *= 0.5
+        for _ in range(self.settings.backtracks + 1):
+            r, e = self._trial(u0, alpha)
+            if r is None:
+                err, alpha = e, 0.5 * alpha
                 continue
             if best is None or r < best[0]:
                 best = (r, alpha)
             if not (self.line_search and armijo) or r <= (1.0 - 1e-4 * alpha) * r_old:
                 return r, alpha, None
             alpha *= 0.5
-        if best is None:
-            m.u.x.array[:] = u0
-            return r_old, 0.0, err
-        r, alpha = best
-        m.u.x.array[:] = u0 + alpha * du
-        return self.residual(), alpha, None
+        return self._settle(u0, best and best[1], r_old, err)
 
     def _energy_search(self, r_old: float):
         """Crisfield's line search on s(a) = du . R(u + a du), s(0) < 0 along a descent direction:
@@ -155,25 +161,20 @@ class Newton:
         trials), keeping the trial of smallest |s|. An inadmissible trial is halved.
         Returns (||R||, alpha, error or None)."""
         m, st = self.model, self.settings
-        du = m.du.x.array
         u0 = m.u.x.array.copy()
         s0 = -self._b_old.dot(m.du.vector)           # b = -R
         lo, hi = (0.0, s0), None
         alpha, err, best = 1.0, None, None
         for _ in range(st.backtracks + 1):
-            m.u.x.array[:] = u0 + alpha * du
-            try:
-                r = self.residual()
-            except (InvertedElement, ReturnMapFailure) as e:
-                err = e
-                hi = None
+            r, e = self._trial(u0, alpha)
+            if r is None:
+                err, hi = e, None
                 alpha = 0.5 * (lo[0] + alpha)
                 continue
             s1 = -self.b.dot(m.du.vector)
             if best is None or abs(s1) < best[0]:
-                best = (abs(s1), alpha, r)
-            if (alpha == 1.0 and r <= st.accept_growth * r_old) or abs(s1) <= st.energy_eta * abs(s0) \
-                    or (s1 * s0 > 0 and hi is None):
+                best = (abs(s1), alpha)
+            if abs(s1) <= st.energy_eta * abs(s0) or (s1 * s0 > 0 and hi is None):
                 return r, alpha, None
             if s1 * s0 > 0:
                 lo = (alpha, s1)
@@ -182,12 +183,7 @@ class Newton:
             a = lo[0] + (hi[0] - lo[0]) * lo[1] / (lo[1] - hi[1])
             width = hi[0] - lo[0]
             alpha = min(max(a, lo[0] + 0.1 * width), hi[0] - 0.1 * width)
-        if best is None:
-            m.u.x.array[:] = u0
-            return r_old, 0.0, err
-        _, alpha, r = best
-        m.u.x.array[:] = u0 + alpha * du
-        return self.residual(), alpha, None
+        return self._settle(u0, best and best[1], r_old, err)
 
     def solve(self) -> tuple[bool, int, str]:
         """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""
