@@ -74,7 +74,8 @@ class NewtonSettings:
     backtracks: int = 4
     free_its: int = 5              # corrections taken in full (unless inadmissible) before the Armijo test
     line_search: bool | str | None = None   # None: on when the model has contact (boundary) terms;
-                                            # True/"residual": Armijo on ||R||; "energy": du.R(u + a du)
+                                            # True/"residual": Armijo on ||R||; "energy": du.R(u + a du);
+                                            # False/"none": off
     energy_eta: float = 0.8        # energy search: accept a step once |du.R| <= eta |du.R(u)|
 
 
@@ -97,7 +98,7 @@ class Newton:
         ls = self.settings.line_search
         if ls is None:
             ls = bool(model.boundary_terms)
-        self.line_search = {True: "residual", False: None}.get(ls, ls)
+        self.line_search = {True: "residual", False: None, "none": None}.get(ls, ls)
         if self.line_search not in (None, "residual", "energy"):
             raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")
         self._b_old = self.b.duplicate()
@@ -152,7 +153,7 @@ class Newton:
             if not (self.line_search and armijo) or r <= (1.0 - 1e-4 * alpha) * r_old:
                 return r, alpha, None
             alpha *= 0.5
-        return self._settle(u0, best and best[1], r_old, err)
+        return self._settle(u0, best[1] if best else None, r_old, err)
 
     def _energy_search(self, r_old: float):
         """Crisfield's line search on s(a) = du . R(u + a du), s(0) < 0 along a descent direction:
@@ -183,7 +184,7 @@ class Newton:
             a = lo[0] + (hi[0] - lo[0]) * lo[1] / (lo[1] - hi[1])
             width = hi[0] - lo[0]
             alpha = min(max(a, lo[0] + 0.1 * width), hi[0] - 0.1 * width)
-        return self._settle(u0, best and best[1], r_old, err)
+        return self._settle(u0, best[1] if best else None, r_old, err)
 
     def solve(self) -> tuple[bool, int, str]:
         """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""

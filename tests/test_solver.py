@@ -43,3 +43,4 @@ def test_unknown_line_search_is_refused():
     model.finalize()
     with pytest.raises(ValueError, match="'bogus'"):
         Newton(model, NewtonSettings(line_search="bogus"))
+    assert Newton(model, NewtonSettings(line_search="none")).line_search is None   # as the message offers
