@@ -4,6 +4,7 @@
     python -m comove_dolfinx.bench contact  --out results/bench     # beam/plate: methods, gamma0
     python -m comove_dolfinx.bench ring     --out results/bench     # ring: mesh sizes
     python -m comove_dolfinx.bench ring_steps --out results/bench   # ring: increments, friction lag
+    python -m comove_dolfinx.bench ring_newton --out results/bench  # ring: penalty, Newton test
 
 Timings are wall-clock seconds, on whatever machine runs them; compare them within one run. The
 elastica study times the increment loop alone; the contact and ring studies run whole scenes through
@@ -82,13 +83,15 @@ def _plot_elastica(out, rows):
     plt.close(fig)
 
 
-def _run(name: str, sets: list[str], out: pathlib.Path, tag: str) -> tuple[dict, list[dict]]:
-    """Run scene ``name`` with overrides into out/runs/<tag>; (run.json, history rows)."""
+def _run(name: str, sets: list[str], out: pathlib.Path, tag: str,
+         newton=None) -> tuple[dict, list[dict]]:
+    """Run scene ``name`` with overrides (and Newton settings instead of the scene's) into
+    out/runs/<tag>; (run.json, history rows)."""
     import json
     from .job import run_scene
     scene = get_scene(name, sets)
     folder = out / "runs" / tag
-    run_scene(scene, folder, progress=False)
+    run_scene(scene, folder, progress=False, newton=newton)
     MPI.COMM_WORLD.barrier()
     info = json.loads((folder / "run.json").read_text())
     with open(folder / "history.csv") as fh:
@@ -199,18 +202,57 @@ def ring_steps(out: pathlib.Path, steps=RING_STEPS) -> list[dict]:
     return rows
 
 
+def _ring_newton_runs():
+    from .solver import NewtonSettings
+    tight = dict(line_search="energy", energy_eta=0.2)        # rtol 1e-8 of the initial residual
+    force = dict(tight, scale="force")
+    return (("gamma0_10_tight", ["gamma0=10"], NewtonSettings(**tight)),
+            ("gamma0_1_tight_eta0.8", ["gamma0=1"], NewtonSettings(line_search="energy")),
+            ("gamma0_1_tight", ["gamma0=1"], NewtonSettings(**tight)),
+            ("gamma0_1", ["gamma0=1"], None),
+            ("gamma0_0.1_tight", [], NewtonSettings(**tight)),
+            ("gamma0_0.1_rtol1e-4", [], NewtonSettings(**force, rtol=1e-4)),
+            ("gamma0_0.1_eta0.8", [], NewtonSettings(line_search="energy", scale="force", rtol=1e-3)),
+            ("default", [], None),
+            ("gamma0_0.03", ["gamma0=0.03"], None))
+
+
+def ring_newton(out: pathlib.Path) -> list[dict]:
+    """Newton iterations against accuracy for the ring: the penalty weight gamma0, the convergence
+    test (1e-8 of the initial residual, or 1e-4 / 1e-3 of ||F_int||) and the energy line search's
+    eta, each P(delta) against the stiffest penalty with the tight test (gamma0 = 10)."""
+    results = {tag: _run("ring", sets, out, f"ring_newton_{tag}", newton)
+               for tag, sets, newton in _ring_newton_runs()}
+    ref = results["gamma0_10_tight"][1]
+    rows = []
+    for tag, (info, hist) in results.items():
+        row = {"run": tag, "gamma0": info["parameters"]["gamma0"]}
+        for d in RING_DELTAS:
+            P, P_ref = _at(hist, "force", d), _at(ref, "force", d)
+            row[f"P_at_{d:g}"] = P
+            row[f"dP_at_{d:g}_percent"] = 100 * (P / P_ref - 1)
+        split = next((r["load"] for r in hist if r["crown_gap"] > 0 and r["contact_width"] > 0),
+                     float("nan"))
+        rows.append({**row, "split_delta": split, "max_penetration": info["max_penetration"],
+                     **_its(info)})
+    _write_csv(out / "ring_newton.csv", rows)
+    return rows
+
+
 def main(argv=None) -> int:
     logging.disable(logging.INFO)
     p = argparse.ArgumentParser(prog="python -m comove_dolfinx.bench", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("study", choices=["elastica", "contact", "ring", "ring_steps", "all"])
+    p.add_argument("study", choices=["elastica", "contact", "ring", "ring_steps", "ring_newton",
+                                     "all"])
     p.add_argument("--out", default="results/bench")
     args = p.parse_args(argv)
     out = pathlib.Path(args.out)
     if MPI.COMM_WORLD.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     MPI.COMM_WORLD.barrier()
-    studies = {"elastica": elastica, "contact": contact, "ring": ring, "ring_steps": ring_steps}
+    studies = {"elastica": elastica, "contact": contact, "ring": ring, "ring_steps": ring_steps,
+               "ring_newton": ring_newton}
     for name in (list(studies) if args.study == "all" else [args.study]):
         rows = studies[name](out)
         if MPI.COMM_WORLD.rank == 0:

@@ -207,7 +207,9 @@ class Contact:
         cells = np.arange(ncell, dtype=np.int32)
         self.h.x.array[DG0.dofmap.list.array.reshape(-1)[:ncell]] = cpp.mesh.h(msh._mesh, tdim, cells)
         self.u_lag = fem.Function(model.V, name="u_lag")
-        gamma = self.gamma0 * model.elastic.E / self.h
+        # a Constant, so that scenes differing only in gamma0 share the compiled forms
+        gamma0E = fem.Constant(msh, PETSc.ScalarType(self.gamma0 * model.elastic.E))
+        gamma = gamma0E / self.h
         self.gamma = gamma
         u, v, u_n = model.u, model.v, model.u_n
         x = model.x + u

@@ -220,6 +220,7 @@ class Model:
         w = self.kin.weight()
         P = J * to_tensor(self.sigma) * ufl.inv(F).T
         R = ufl.inner(P, self.kin.grad3(v)) * w * dx
+        self._internal, self._internal_form = (R, jit_params or {}), None
         for ext in self._external:
             R = R - ext
         for term in self.boundary_terms:
@@ -249,6 +250,15 @@ class Model:
         self._state_new = None if up.state_new is None else np.zeros((self.rule.size, 4))
         self._compiled = True
         self.set_load(0.0)
+
+    @property
+    def internal_force_form(self):
+        """The internal force vector F_int = int P : Grad v (without loads and contact terms),
+        compiled on first use: its norm is the force scale of the "force" convergence test."""
+        if self._internal_form is None:
+            R, jit = self._internal
+            self._internal_form = fem.form(R, jit_params=jit)
+        return self._internal_form
 
     def nominal_traction(self, N, u=None):
         """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the

@@ -4,10 +4,14 @@ Newton works on the total displacement u. Each iteration evaluates the stress up
 map) at the quadrature points, assembles the residual and the exact Jacobian and solves with MUMPS;
 the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic analysis is done once.
 
-Convergence: ||R|| <= rtol * R_scale + atol, with R_scale the largest initial residual norm of the
-increments so far (a force scale of the run), or a Newton correction ||du|| <= stol * ||u|| (the
-residual of a stiff body stalls at a round-off floor set by its internal forces, which can exceed
-rtol * R_scale when the load increments are small; only a full step counts). Each Newton correction
+Convergence: ||R|| <= rtol * R_scale + atol, with R_scale (``scale``) either the largest initial
+residual norm of the increments so far ("initial", a force scale of the run, which depends on the
+increment size), or the norm of the internal force vector F_int = int P : Grad v at the iterate
+("force": at equilibrium the applied loads, reactions and contact forces, so rtol bounds the
+out-of-balance force as a fraction of the forces the body carries), or a Newton correction
+||du|| <= stol * ||u|| (the residual of a stiff body stalls at a round-off floor set by its
+internal forces, which can exceed rtol * R_scale when the load increments are small; only a full
+step counts). Each Newton correction
 is halved (up to ``backtracks`` times) while it leads to an inadmissible iterate (det F <= 0, or an
 increment the S-R split cannot represent). Line search (``line_search``): with contact terms by
 default, corrections after the first ``free_its`` of an increment must also lower ||R|| (Armijo test
@@ -77,6 +81,8 @@ class NewtonSettings:
                                             # True/"residual": Armijo on ||R||; "energy": du.R(u + a du);
                                             # False/"none": off
     energy_eta: float = 0.8        # energy search: accept a step once |du.R| <= eta |du.R(u)|
+    scale: str = "initial"         # what rtol is relative to: "initial", the largest initial
+                                   # residual of the run; "force", ||F_int|| of the iterate
 
 
 class Newton:
@@ -101,7 +107,10 @@ class Newton:
         self.line_search = {True: "residual", False: None, "none": None}.get(ls, ls)
         if self.line_search not in (None, "residual", "energy"):
             raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")
+        if self.settings.scale not in ("initial", "force"):
+            raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
         self._b_old = self.b.duplicate()
+        self._f = self.b.duplicate()
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
 
@@ -119,6 +128,16 @@ class Newton:
             fem_petsc.set_bc(b, m.bcs, m.u.vector, -1.0)
             b.scale(-1.0)
         return b.norm()
+
+    def force_scale(self) -> float:
+        """||F_int|| at the current iterate (stress of the last residual evaluation): the forces
+        the body carries, reactions and contact forces included."""
+        f = self._f
+        with f.localForm() as fl:
+            fl.set(0.0)
+        fem_petsc.assemble_vector(f, self.model.internal_force_form)
+        f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return f.norm()
 
     def _trial(self, u0: np.ndarray, alpha: float):
         """u = u0 + alpha du and its ||R||; (None, error) if the iterate is inadmissible."""
@@ -196,6 +215,9 @@ class Newton:
             return False, 0, str(err)
         self.residual_scale = max(self.residual_scale, r0)
         for it in range(1, s.max_it + 1):
+            if s.scale == "force":
+                with self.timer("assembly"):
+                    self.residual_scale = self.force_scale()
             if rnorm <= s.rtol * self.residual_scale + s.atol:
                 return True, it - 1, "converged"
             with self.timer("assembly"):
@@ -222,6 +244,8 @@ class Newton:
                 return False, it, f"diverged (|R| = {rnorm:.3e})"
             if alpha == 1.0 and dnorm <= s.stol * m.u.vector.norm():
                 return True, it, "converged"
+        if s.scale == "force":
+            self.residual_scale = self.force_scale()
         converged = rnorm <= s.rtol * self.residual_scale + s.atol
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
 

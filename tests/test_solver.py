@@ -1,6 +1,7 @@
 """Increment control and Newton globalisation: the predictor's extrapolation, the energy line search."""
 import numpy as np
 import pytest
+from dolfinx import fem
 from mpi4py import MPI
 
 from comove_dolfinx.scenes import get_scene
@@ -44,3 +45,34 @@ def test_unknown_line_search_is_refused():
     with pytest.raises(ValueError, match="'bogus'"):
         Newton(model, NewtonSettings(line_search="bogus"))
     assert Newton(model, NewtonSettings(line_search="none")).line_search is None   # as the message offers
+    with pytest.raises(ValueError, match="'bogus'"):
+        Newton(model, NewtonSettings(scale="bogus"))
+
+
+@pytest.mark.mpi
+def test_force_scaled_convergence_balances_the_reaction():
+    """With rtol relative to ||F_int|| (scale = "force") the elastica still lands on the closed form,
+    and F_int, the force scale, is what the body carries: its vertical components sum to zero (a
+    constant is a rigid motion) and, at the clamp, to the reaction that balances the dead tip load P
+    (equilibrium of the whole cantilever, to within rtol)."""
+    scene = get_scene("elastica", ["lam=2", "n_steps=10"])
+    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    model.finalize()
+    solver = IncrementalSolver(model, StepSettings(n_steps=10), NewtonSettings(scale="force",
+                                                                              rtol=1e-6))
+    res = solver.run()
+    assert res.completed, res.message
+    assert -scene.history_row(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)
+    newton = solver.newton
+    f_norm = newton.force_scale()
+    assert newton.residual() <= 1e-6 * f_norm
+    V = model.V
+    clamp = fem.locate_dofs_topological(V.sub(1), 1, model._facets("left"))   # unrolled (y) dofs
+    f = newton._f.array                                                         # owned entries
+    owned = clamp[clamp < f.size]
+    comm = MPI.COMM_WORLD
+    reaction = comm.allreduce(float(f[owned].sum()), op=MPI.SUM)
+    total = comm.allreduce(float(f[1::2].sum()), op=MPI.SUM)
+    P = scene.lam * scene.E * scene.h ** 3 / 12 / scene.L ** 2
+    assert abs(total) < 1e-9 * f_norm
+    assert reaction == pytest.approx(P, rel=1e-5)
