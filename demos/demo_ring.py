@@ -21,7 +21,7 @@ from mpi4py import MPI  # noqa: E402
 
 from comove_dolfinx.job import run_scene  # noqa: E402
 from comove_dolfinx.plotting import Snapshots, draw_plane, read_history, snapshot_grid  # noqa: E402
-from comove_dolfinx.scenes import get_scene  # noqa: E402
+from comove_dolfinx.scenes import get_scene, split_delta  # noqa: E402
 
 logging.disable(logging.INFO)
 parser = argparse.ArgumentParser(description="the ring scene with pictures")
@@ -70,10 +70,10 @@ if MPI.COMM_WORLD.rank == 0:
     a1.legend()
     a2.plot(h["load"], h["contact_width"], label="contact width [cm]")
     a2.plot(h["load"], 100 * np.maximum(h["crown_gap"], 0), label="crown gap x 100 [cm]")
-    split = h["load"][(h["crown_gap"] > 0) & (h["contact_width"] > 0)]
-    if split.size:
-        a2.axvline(split[0], color="grey", ls="--", lw=0.8)
-        print(f"the contact zone splits at delta = {split[0]:.4g} (the crown lifts off the plate)")
+    split = split_delta(h["load"], h["crown_gap"], h["contact_width"])
+    if split is not None:
+        a2.axvline(split, color="grey", ls="--", lw=0.8)
+        print(f"the contact zone splits at delta = {split:.4g} (the crown lifts off the plate)")
     else:
         print("the contact zone does not split within the run")
     a2.set(xlabel="plate approach delta [cm]", title="contact on the plate")

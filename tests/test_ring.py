@@ -6,7 +6,7 @@ import math
 import pytest
 
 from comove_dolfinx.job import run_scene
-from comove_dolfinx.scenes import get_scene
+from comove_dolfinx.scenes import get_scene, split_delta
 
 COARSE = ["size=0.3"]
 
@@ -89,3 +89,14 @@ def test_knee_and_post_collapse_band(mpi_tmp):
             assert bound < r["force"] < 1.6 * bound, r["load"]
     # the knee: at delta = 1.5 the force is a small fraction of the elastic extrapolation
     assert forces[-1] < 0.1 * slope * rows[-1]["load"]
+
+
+def test_split_delta_interpolates_the_lift_off():
+    """A crown gap linear in delta, g = 0.01 (delta - 1.57), sampled every 0.22: the split is found at
+    1.57, not at the first open increment, nor at an early opening that closes again; no split
+    while the crown stays closed."""
+    d = [0.22 * k for k in range(1, 12)]
+    g = [0.01 * (x - 1.57) for x in d]
+    assert split_delta(d, g, [1.0] * len(d)) == pytest.approx(1.57)
+    assert split_delta(d, [1e-6] + g[1:], [1.0] * len(d)) == pytest.approx(1.57)
+    assert split_delta(d, [-1e-3] * len(d), [1.0] * len(d)) is None
