@@ -143,6 +143,16 @@ def _at(hist: list[dict], key: str, load: float) -> float:
     return float(np.interp(load, x, y)) if hist and load <= x[-1] + 1e-9 else float("nan")
 
 
+def _p_against(hist: list[dict], ref: list[dict]) -> dict:
+    """P at RING_DELTAS and its deviation in percent from the reference run's."""
+    row = {}
+    for d in RING_DELTAS:
+        P, P_ref = _at(hist, "force", d), _at(ref, "force", d)
+        row[f"P_at_{d:g}"] = P
+        row[f"dP_at_{d:g}_percent"] = 100 * (P / P_ref - 1)
+    return row
+
+
 def _split(hist: list[dict]) -> float:
     from .scenes import split_delta
     d = split_delta(*([r[k] for r in hist] for k in ("load", "crown_gap", "contact_width")))
@@ -157,10 +167,9 @@ def ring(out: pathlib.Path, factors=(1.0, 0.5, 2.0)) -> list[dict]:
         size = Ring.size * f
         info, hist = _run("ring", [f"size={size:g}"], out, f"ring_size{size:g}")
         curves[size] = hist
-        split = _split(hist)
         rows.append({"size": size, "dofs": info["dofs"],
                      **{f"P_at_{d:g}": _at(hist, "force", d) for d in RING_DELTAS},
-                     "split_delta": split,
+                     "split_delta": _split(hist),
                      "max_plastic_strain": hist[-1]["max_plastic_strain"] if hist else float("nan"),
                      **_its(info)})
     _write_csv(out / "ring_mesh.csv", rows)
@@ -196,14 +205,8 @@ def ring_steps(out: pathlib.Path, steps=RING_STEPS) -> list[dict]:
              for k in (1, 4, 16)]
     results = {tag: _run("ring", sets, out, f"ring_{tag}") for tag, sets in runs}
     ref = results[f"lagged_n{max(steps)}"][1]
-    rows = []
-    for tag, (info, hist) in results.items():
-        row = {"run": tag}
-        for d in RING_DELTAS:
-            P, P_ref = _at(hist, "force", d), _at(ref, "force", d)
-            row[f"P_at_{d:g}"] = P
-            row[f"dP_at_{d:g}_percent"] = 100 * (P / P_ref - 1)
-        rows.append({**row, **_its(info)})
+    rows = [{"run": tag, **_p_against(hist, ref), **_its(info)}
+            for tag, (info, hist) in results.items()]
     _write_csv(out / "ring_increments.csv", rows)
     return rows
 
@@ -230,16 +233,9 @@ def ring_newton(out: pathlib.Path) -> list[dict]:
     results = {tag: _run("ring", sets, out, f"ring_newton_{tag}", newton)
                for tag, sets, newton in _ring_newton_runs()}
     ref = results["gamma0_10_tight"][1]
-    rows = []
-    for tag, (info, hist) in results.items():
-        row = {"run": tag, "gamma0": info["parameters"]["gamma0"]}
-        for d in RING_DELTAS:
-            P, P_ref = _at(hist, "force", d), _at(ref, "force", d)
-            row[f"P_at_{d:g}"] = P
-            row[f"dP_at_{d:g}_percent"] = 100 * (P / P_ref - 1)
-        split = _split(hist)
-        rows.append({**row, "split_delta": split, "max_penetration": info["max_penetration"],
-                     **_its(info)})
+    rows = [{"run": tag, "gamma0": info["parameters"]["gamma0"], **_p_against(hist, ref),
+             "split_delta": _split(hist), "max_penetration": info["max_penetration"], **_its(info)}
+            for tag, (info, hist) in results.items()]
     _write_csv(out / "ring_newton.csv", rows)
     return rows
 

@@ -11,9 +11,8 @@ increment size), or the norm of the internal force vector F_int = int P : Grad v
 out-of-balance force as a fraction of the forces the body carries), or a Newton correction
 ||du|| <= stol * ||u|| (the residual of a stiff body stalls at a round-off floor set by its
 internal forces, which can exceed rtol * R_scale when the load increments are small; only a full
-step counts). Each Newton correction
-is halved (up to ``backtracks`` times) while it leads to an inadmissible iterate (det F <= 0, or an
-increment the S-R split cannot represent). Line search (``line_search``): with contact terms by
+step counts). Each Newton correction is halved (up to ``backtracks`` times) while it leads to an
+inadmissible iterate (det F <= 0, or an increment the S-R split cannot represent). Line search (``line_search``): with contact terms by
 default, corrections after the first ``free_its`` of an increment must also lower ||R|| (Armijo test
 on the residual norm), which stops the active-set and stick/slip cycling; without contact it is off,
 because ||R|| is not monotone along a converging Newton path of a rotating slender body (the first
@@ -139,6 +138,14 @@ class Newton:
         f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         return f.norm()
 
+    def _converged(self, rnorm: float) -> bool:
+        """The residual test; with scale "force" against ||F_int|| of the current iterate."""
+        s = self.settings
+        if s.scale == "force":
+            with self.timer("assembly"):
+                self.residual_scale = self.force_scale()
+        return rnorm <= s.rtol * self.residual_scale + s.atol
+
     def _trial(self, u0: np.ndarray, alpha: float):
         """u = u0 + alpha du and its ||R||; (None, error) if the iterate is inadmissible."""
         m = self.model
@@ -213,12 +220,10 @@ class Newton:
             r0 = rnorm = self.residual()
         except (InvertedElement, ReturnMapFailure) as err:
             return False, 0, str(err)
-        self.residual_scale = max(self.residual_scale, r0)
+        if s.scale == "initial":
+            self.residual_scale = max(self.residual_scale, r0)
         for it in range(1, s.max_it + 1):
-            if s.scale == "force":
-                with self.timer("assembly"):
-                    self.residual_scale = self.force_scale()
-            if rnorm <= s.rtol * self.residual_scale + s.atol:
+            if self._converged(rnorm):
                 return True, it - 1, "converged"
             with self.timer("assembly"):
                 self.A.zeroEntries()
@@ -244,9 +249,7 @@ class Newton:
                 return False, it, f"diverged (|R| = {rnorm:.3e})"
             if alpha == 1.0 and dnorm <= s.stol * m.u.vector.norm():
                 return True, it, "converged"
-        if s.scale == "force":
-            self.residual_scale = self.force_scale()
-        converged = rnorm <= s.rtol * self.residual_scale + s.atol
+        converged = self._converged(rnorm)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
 
 
