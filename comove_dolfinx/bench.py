@@ -36,7 +36,7 @@ def _write_csv(path: pathlib.Path, rows: list[dict]) -> None:
         w.writerows(rows)
 
 
-def elastica(out: pathlib.Path, updates=None, steps=(1, 2, 5, 10, 20)) -> list[dict]:
+def elastica(out: pathlib.Path, updates=None, steps=(1, 2, 3, 4, 5, 10, 20)) -> list[dict]:
     """Tip-deflection error at lam = 5 and wall time against the number of equal increments."""
     from .updates import UPDATES
     rows = []

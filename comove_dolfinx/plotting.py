@@ -84,11 +84,13 @@ class Snapshots:
         return Snapshot(load, XY, T, Vals, label)
 
 
-def read_history(path) -> dict[str, np.ndarray]:
-    """Columns of a history.csv as arrays."""
+def read_history(path, origin: bool = False) -> dict[str, np.ndarray]:
+    """Columns of a history.csv as arrays; with ``origin`` led by the unloaded state (a row of zeros:
+    no load, displacement, force or contact), so that curves start where the body did."""
     with open(path) as fh:
         rows = list(csv.DictReader(fh))
-    return {k: np.array([float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
+    lead = [0.0] if origin else []
+    return {k: np.array(lead + [float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
 
 
 def draw(ax, snap: Snapshot, vmin=None, vmax=None, mirror: bool = False, cmap: str = "viridis"):

@@ -50,7 +50,7 @@ if MPI.COMM_WORLD.rank == 0:
 
     snapshot_grid(snaps.taken, plane, out / "beam_shapes.png", "beam: deformed configurations",
                   load_name="q [kgf/cm$^2$]")
-    h = read_history(out / "history.csv")
+    h = read_history(out / "history.csv", origin=True)
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     a1.plot(h["load"], -h["tip_uy"], "o-", ms=3, label="$-u_y$ at the tip")
     a1.plot(h["load"], -h["tip_ux"], "s-", ms=3, label="$-u_x$ at the tip")

@@ -44,7 +44,7 @@ if MPI.COMM_WORLD.rank == 0:
 
     snapshot_grid(snaps.taken, base, out / "plate_shapes.png", "plate: deformed configurations",
                   mirror=True, xlabel="r [cm]", ylabel="z [cm]", load_name="p [kgf/cm$^2$]")
-    h = read_history(out / "history.csv")
+    h = read_history(out / "history.csv", origin=True)
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     a1.plot(h["load"], -h["center_uz"], "o-", ms=3, label="$-u_z$ at the centre")
     a1.plot(h["load"], h["rim_ur"], "s-", ms=3, label="$u_r$ at the lower rim")

@@ -1,0 +1,47 @@
+"""The demo scripts run as a user runs them (a process of their own, serial and on two ranks), leave
+their pictures and XDMF file, and end where the physics puts them: the beam's tip and the plate's centre
+rest on the obstacle (displacement = gap, to the penalty's penetration), the crushed ring carries more
+than the rigid-perfectly-plastic ring (DeRunz-Hodge), and two ranks give the serial history."""
+import os
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+from test_elastica import read_history
+
+DEMOS = pathlib.Path(__file__).resolve().parent.parent / "demos"
+
+
+def _demo(name, out, sets=(), n=1):
+    env = dict(os.environ, MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    cmd = [sys.executable, str(DEMOS / f"demo_{name}.py"), "--out", str(out)]
+    for s in sets:
+        cmd += ["--set", s]
+    if n > 1:
+        cmd = ["mpirun", "-n", str(n), *cmd]
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+    assert p.returncode == 0, p.stdout + p.stderr
+    for f in ("results.xdmf", "results.h5", "history.csv", f"{name}_shapes.png", f"{name}_curves.png"):
+        assert (out / f).is_file(), f
+    return p.stdout, read_history(out / "history.csv")
+
+
+@pytest.mark.parametrize("name, column, gap", [("beam", "tip_uy", 3.0), ("plate", "center_uz", 1.5)])
+def test_elastic_demos_end_on_the_obstacle(tmp_path, name, column, gap):
+    out, hist = _demo(name, tmp_path, ["size=0.25"])
+    assert "completed" in out
+    assert -hist[-1][column] == pytest.approx(gap, abs=1e-3)
+    assert hist[-1]["contact_force"] > 0
+
+
+def test_ring_demo_above_rigid_plastic_and_same_on_two_ranks(tmp_path):
+    out, serial = _demo("ring", tmp_path / "np1")
+    assert "above the rigid-plastic curve" in out
+    assert "contact zone splits" in out
+    _, parallel = _demo("ring", tmp_path / "np2", n=2)
+    assert len(parallel) == len(serial)
+    for a, b in zip(serial, parallel):
+        assert b["force"] == pytest.approx(a["force"], rel=1e-6)
