@@ -59,7 +59,7 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
         if c.mu > 0:
             extra.append(("contact_shear", lambda c=c: c.shear))
     history = History(out / "history.csv", scene.history_columns(), comm)
-    xdmf = XDMFOutput(out / "results.xdmf", model, extra)
+    xdmf = XDMFOutput(out / "results.xdmf", model, extra, scene.fibres(model))
     stats = {"first_contact_load": None, "max_penetration": 0.0}
     _print(comm, f"{scene.name}: {model.num_dofs()} dofs, {md.mesh.topology.index_map(2).size_global}"
                  f" cells, {model.kin.model}, update {scene.update}, {scene.n_steps} increments nominal")

@@ -3,8 +3,10 @@
 XDMF (``results.xdmf`` + ``.h5``), one time step per converged increment, time = load factor:
 ``displacement`` (exact: the mesh geometry has the displacement's degree, so every P2 node is written),
 ``cauchy_stress`` (3x3, cell averages, index 2 = out-of-plane / hoop), ``von_mises`` (cell averages),
-``plastic_strain`` (equivalent, elastic-plastic bodies), plus fields registered by other modules
-(e.g. the contact pressure). In ParaView: open results.xdmf (reader "Xdmf3ReaderT"), apply "Warp By
+``plastic_strain`` (equivalent, elastic-plastic bodies), the normal stress along convected fibres that
+the scene names (physical components on the convected base, cell averages: ``fibre_stress`` along the
+deformed beam axis, ``hoop_stress`` of the ring, ``radial_stress`` of the plate), plus fields
+registered by other modules (e.g. the contact pressure). In ParaView: open results.xdmf (reader "Xdmf3ReaderT"), apply "Warp By
 Vector" with the displacement to see the deformed body.
 """
 from __future__ import annotations
@@ -13,8 +15,11 @@ import csv
 import pathlib
 
 import numpy as np
+import ufl
 from dolfinx import fem, io
 from mpi4py import MPI
+
+from .kinematics import fibre_stress, to_tensor
 
 
 class Probe:
@@ -76,10 +81,35 @@ def _fmt(v) -> str:
     return f"{float(v):.10g}"
 
 
-class XDMFOutput:
-    """Per-increment XDMF of a model's fields (``extra`` adds (name, callable -> Function) pairs)."""
+class FibreStress:
+    """Normal Cauchy stress along the convected fibre a = F A of a reference direction A, a.sigma.a /
+    a.a (the diagonal physical component on the convected base, kinematics.fibre_stress), as cell
+    averages in a DG0 function. ``A``: in-plane unit vector, a constant or a UFL expression of the
+    reference coordinates (e.g. the ring's hoop direction)."""
 
-    def __init__(self, path: pathlib.Path, model, extra=()):
+    def __init__(self, model, name: str, A):
+        rule = model.rule
+        A3 = ufl.as_vector([A[0], A[1], 0.0])
+        self.rule = rule
+        self.expr = rule.expression(fibre_stress(to_tensor(model.sigma), model.F, A3))
+        DG0 = fem.FunctionSpace(model.mesh, ("DG", 0))
+        self.function = fem.Function(DG0, name=name)
+        self.cell_dofs = DG0.dofmap.list.array.reshape(-1)[:len(rule.cells)]
+
+    def values(self) -> np.ndarray:
+        """Cell averages over the local and ghost cells at the current iterate."""
+        return self.rule.cell_average(self.rule.evaluate(self.expr)[:, 0])
+
+    def update(self) -> fem.Function:
+        self.function.x.array[self.cell_dofs] = self.values()
+        return self.function
+
+
+class XDMFOutput:
+    """Per-increment XDMF of a model's fields (``extra`` adds (name, callable -> Function) pairs,
+    ``fibres`` (name, reference direction) pairs of :class:`FibreStress`)."""
+
+    def __init__(self, path: pathlib.Path, model, extra=(), fibres=()):
         msh = model.mesh
         gdeg = msh.geometry.cmap.degree
         if model.degree != gdeg:
@@ -95,6 +125,7 @@ class XDMFOutput:
         self.mises = fem.Function(DG0, name="von_mises")
         self.plastic = fem.Function(DG0, name="plastic_strain") if model.plasticity else None
         self.extra = list(extra)
+        self.fibres = [FibreStress(model, name, A) for name, A in fibres]
         # DG0 dof of each local and ghost cell (the numbering need not follow the cells)
         self.cell_dofs = DG0.dofmap.list.array.reshape(-1)[:len(model.rule.cells)]
         self.cell_dofs_T = T0.dofmap.list.array.reshape(-1)[:len(model.rule.cells)]
@@ -112,6 +143,7 @@ class XDMFOutput:
         if self.plastic is not None:
             self.plastic.x.array[self.cell_dofs] = rule.cell_average(m.p.x.array)
             funcs.append(self.plastic)
+        funcs += [f.update() for f in self.fibres]
         funcs += [make() for _, make in self.extra]
         for f in funcs:
             self.file.write_function(f, t)

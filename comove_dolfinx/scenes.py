@@ -12,6 +12,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import ClassVar
 
+import ufl
 from mpi4py import MPI
 
 from . import geometry
@@ -131,6 +132,10 @@ class Scene:
         """The contact terms of the built model (none for a scene without obstacles)."""
         return []
 
+    def fibres(self, model) -> list:
+        """(name, reference direction) of the fibres whose normal stress goes to the XDMF output."""
+        return []
+
     def newton_settings(self) -> NewtonSettings:
         """Newton settings of the scene (the solver's defaults unless a scene needs others)."""
         return NewtonSettings()
@@ -207,6 +212,9 @@ class Elastica(Scene):
     def history_row(self, model):
         ux, uy = self._tip(model.u)
         return {"tip_ux": ux, "tip_uy": uy}
+
+    def fibres(self, model):
+        return [("fibre_stress", (1.0, 0.0))]       # along the deformed beam axis
 
 
 @dataclass
@@ -298,6 +306,9 @@ class Beam(ContactScene):
         force = c.force()[1] if c else 0.0
         return {"tip_ux": ux, "tip_uy": uy, "contact_length": length, "contact_force": force}
 
+    def fibres(self, model):
+        return [("fibre_stress", (1.0, 0.0))]       # along the deformed beam axis
+
 
 @dataclass
 class Plate(ContactScene):
@@ -354,6 +365,9 @@ class Plate(ContactScene):
             force = c.force()[1]
         return {"center_uz": self._center(model.u)[1], "contact_radius": radius,
                 "rim_ur": self._rim(model.u)[0], "contact_force": force}
+
+    def fibres(self, model):
+        return [("radial_stress", (1.0, 0.0))]      # along the deformed radius (bending stress)
 
 
 # Representative mild steel of scenes.md: equivalent plastic strain -> yield stress [kgf/cm^2]
@@ -479,6 +493,11 @@ class Ring(ContactScene):
         pmax = model.comm.allreduce(float(p.max()) if p.size else 0.0, op=MPI.MAX)
         return {"force": force, "contact_width": width, "crown_gap": crown_gap,
                 "max_plastic_strain": pmax}
+
+    def fibres(self, model):
+        x = model.x
+        r = ufl.sqrt(x[0] ** 2 + x[1] ** 2)
+        return [("hoop_stress", (-x[1] / r, x[0] / r))]   # along the deformed ring's circumference
 
 
 def split_delta(load, crown_gap, contact_width) -> float | None:
