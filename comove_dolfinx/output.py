@@ -6,8 +6,8 @@ XDMF (``results.xdmf`` + ``.h5``), one time step per converged increment, time =
 ``plastic_strain`` (equivalent, elastic-plastic bodies), the normal stress along convected fibres that
 the scene names (physical components on the convected base, cell averages: ``fibre_stress`` along the
 deformed beam axis, ``hoop_stress`` of the ring, ``radial_stress`` of the plate), plus fields
-registered by other modules (e.g. the contact pressure). In ParaView: open results.xdmf (reader "Xdmf3ReaderT"), apply "Warp By
-Vector" with the displacement to see the deformed body.
+registered by other modules (e.g. the contact pressure). In ParaView: open results.xdmf (reader
+"Xdmf3ReaderT"), apply "Warp By Vector" with the displacement to see the deformed body.
 """
 from __future__ import annotations
 
