@@ -8,7 +8,9 @@
 
 Timings are wall-clock seconds, on whatever machine runs them; compare them within one run. The
 elastica study times the increment loop alone; the contact and ring studies run whole scenes through
-``run_scene`` (results of each under out/runs/) and report the wall time of the run (with output).
+``run_scene`` (results of each under out/runs/) and report the wall time of the run (with output) and,
+apart, the part of it spent building and compiling the model (``compile_s``: seconds when the process
+meets a kind of model first and its forms are not in the JIT cache, hundredths afterwards).
 """
 from __future__ import annotations
 
@@ -104,7 +106,8 @@ def _its(info: dict) -> dict:
     return {"completed": int(info["completed"]), "increments": len(its),
             "newton_mean": sum(its) / len(its) if its else float("nan"),
             "newton_max": max(its) if its else 0, "failed_its": info.get("failed_its", 0),
-            "wall_s": info["wall_s"]}
+            "wall_s": info["wall_s"],
+            "compile_s": info["timing"].get("setup and compilation", 0.0)}
 
 
 CONTACT_VARIANTS = (("penalty", []), ("penalty_gamma0x10", ["gamma0=1000"]),
