@@ -5,6 +5,7 @@
     python -m comove_dolfinx.bench ring     --out results/bench     # ring: mesh sizes
     python -m comove_dolfinx.bench ring_steps --out results/bench   # ring: increments, friction lag
     python -m comove_dolfinx.bench ring_newton --out results/bench  # ring: penalty, Newton test
+    python -m comove_dolfinx.bench ring_tolerance --out results/bench  # ring: rtol x increments
 
 Timings are wall-clock seconds, on whatever machine runs them; compare them within one run. The
 elastica study times the increment loop alone; the contact and ring studies run whole scenes through
@@ -243,12 +244,77 @@ def ring_newton(out: pathlib.Path) -> list[dict]:
     return rows
 
 
+RING_TOLERANCES = (1e-3, 3e-3, 5e-3)
+RING_TOLERANCE_STEPS = (30, 32, 34, 36, 38, 40)
+RING_TIGHT = 1e-6
+
+
+def _deviation(hist: list[dict], ref: list[dict], key: str) -> float:
+    """Largest |hist - ref| of column ``key`` over the load levels both runs reached."""
+    ref_at = {round(r["load"], 9): r[key] for r in ref}
+    dev = [abs(r[key] - ref_at[round(r["load"], 9)]) for r in hist if round(r["load"], 9) in ref_at]
+    return max(dev) if dev else float("nan")
+
+
+def ring_tolerance(out: pathlib.Path, steps=RING_TOLERANCE_STEPS, rtols=RING_TOLERANCES) -> list[dict]:
+    """What a looser convergence test costs in accuracy: for each nominal number of increments, the
+    crush with the scene's test (out-of-balance force below rtol ||F_int||) at each rtol, compared at
+    every load level it shares with a run of the same increments converged to RING_TIGHT: the largest
+    deviation of P (percent of the tight run's P there) and of the crown gap. ``same_path`` says
+    whether both runs took the same increments (a cut-back in one of them puts increment error into
+    the deviation). The increments' own error is read off ``ring_steps``; a test is loose enough
+    when its deviation stays well below it."""
+    import dataclasses
+    from .scenes import Ring
+    base = Ring().newton_settings()
+    rows = []
+    for n in steps:
+        _, ref = _run("ring", [f"n_steps={n}"], out, f"ring_tol_n{n}_tight",
+                      dataclasses.replace(base, rtol=RING_TIGHT))
+        P_ref = {round(r["load"], 9): r["force"] for r in ref}
+        for rtol in rtols:
+            info, hist = _run("ring", [f"n_steps={n}"], out, f"ring_tol_n{n}_rtol{rtol:g}",
+                              dataclasses.replace(base, rtol=rtol))
+            dP = [abs(r["force"] / P_ref[k] - 1) for r in hist
+                  if (k := round(r["load"], 9)) in P_ref and P_ref[k] > 0]
+            same = [round(r["load"], 9) for r in hist] == [round(r["load"], 9) for r in ref]
+            rows.append({"n_steps": n, "rtol": rtol, "same_path": int(same),
+                         "max_dP_percent": 100 * max(dP) if dP else float("nan"),
+                         "max_dgap": _deviation(hist, ref, "crown_gap"),
+                         "split_delta": _split(hist), "split_delta_tight": _split(ref),
+                         **_its(info)})
+    _write_csv(out / "ring_tolerance.csv", rows)
+    if MPI.COMM_WORLD.rank == 0:
+        _plot_tolerance(out, rows)
+    return rows
+
+
+def _plot_tolerance(out, rows):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    for rtol in dict.fromkeys(r["rtol"] for r in rows):
+        rs = [r for r in rows if r["rtol"] == rtol]
+        a1.plot([r["n_steps"] for r in rs], [r["newton_mean"] for r in rs], "o-", label=f"rtol {rtol:g}")
+        a2.semilogy([r["n_steps"] for r in rs], [max(r["max_dP_percent"], 1e-4) for r in rs], "o-",
+                    label=f"rtol {rtol:g}")
+    a1.axhline(5.0, color="grey", lw=0.8, ls="--")
+    a1.set(xlabel="nominal increments", ylabel="Newton iterations per increment (mean)",
+           title="ring crush")
+    a2.set(xlabel="nominal increments", ylabel=f"largest |P - P(rtol {RING_TIGHT:g})| / P [%]")
+    a1.legend()
+    fig.tight_layout()
+    fig.savefig(out / "ring_tolerance.png", dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     logging.disable(logging.INFO)
     p = argparse.ArgumentParser(prog="python -m comove_dolfinx.bench", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("study", choices=["elastica", "contact", "ring", "ring_steps", "ring_newton",
-                                     "all"])
+                                     "ring_tolerance", "all"])
     p.add_argument("--out", default="results/bench")
     args = p.parse_args(argv)
     out = pathlib.Path(args.out)
@@ -256,7 +322,7 @@ def main(argv=None) -> int:
         out.mkdir(parents=True, exist_ok=True)
     MPI.COMM_WORLD.barrier()
     studies = {"elastica": elastica, "contact": contact, "ring": ring, "ring_steps": ring_steps,
-               "ring_newton": ring_newton}
+               "ring_newton": ring_newton, "ring_tolerance": ring_tolerance}
     for name in (list(studies) if args.study == "all" else [args.study]):
         rows = studies[name](out)
         if MPI.COMM_WORLD.rank == 0:
