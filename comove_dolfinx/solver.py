@@ -20,7 +20,13 @@ corrections raise the axial residual by orders of magnitude). "energy" is Crisfi
 root of du . R(u + a du) along the correction (regula falsi), for bodies whose corrections overshoot
 (plastic hinges; Crisfield, Non-linear Finite Element Analysis of Solids and Structures, vol. 1, 9.3).
 An increment starts from the last converged state, or with ``predictor`` from the Lagrange
-extrapolation (linear or quadratic in the load factor) of the last converged states.
+extrapolation (linear or quadratic in the load factor) of the last converged states, or ("tangent")
+from the Euler step along the path's tangent at the last converged state: K du/dt = -dR/dt, with K
+the tangent Newton factorised last (the algorithmic tangent of the increment just converged, so its
+plastic points keep loading) and dR/dt a forward difference in the load factor (the loads are linear
+in it); one back-substitution, no new factorisation, so it is not counted as a Newton iteration.
+Unlike an extrapolation it knows where the path is heading at t_n, not where it came from; the first
+increment, before any factorisation, starts from the unloaded state.
 An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
 ``divergence`` over the increment's first fails the increment; the loop
 then restores the last converged state and halves the increment, up to ``max_cutbacks`` times in a
@@ -39,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from .model import InvertedElement, Model, ReturnMapFailure
@@ -110,6 +117,7 @@ class Newton:
             raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
         self._b_old = self.b.duplicate()
         self._f = self.b.duplicate()
+        self.factorised = False            # the KSP holds the LU factors of a tangent
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
 
@@ -232,6 +240,7 @@ class Newton:
             with self.timer("solve"):
                 self.ksp.solve(self.b, m.du.vector)
                 m.du.x.scatter_forward()
+            self.factorised = True
             dnorm = m.du.vector.norm()
             if self.line_search == "energy":
                 self.b.copy(self._b_old)
@@ -251,6 +260,31 @@ class Newton:
                 return True, it, "converged"
         converged = self._converged(rnorm)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
+
+
+    def load_rate(self, t: float, rate: fem.Function, eps: float) -> bool:
+        """The path's tangent at the current state and load factor t into ``rate``: K v = -dR/dt with
+        the last factorised tangent K and dR/dt = (R(t + eps) - R(t)) / eps; False (rate untouched)
+        before any factorisation or if the state cannot be evaluated."""
+        if not self.factorised:
+            return False
+        m = self.model
+        rhs = self._b_old
+        try:
+            with self.timer("predictor"):
+                m.set_load(t + eps)
+                self.residual()
+                self.b.copy(rhs)
+                m.set_load(t)
+                self.residual()
+                rhs.axpy(-1.0, self.b)          # b = -R: rhs = -(R(t + eps) - R(t))
+                rhs.scale(1.0 / eps)
+                self.ksp.solve(rhs, rate.vector)
+                rate.x.scatter_forward()
+        except (InvertedElement, ReturnMapFailure):
+            m.set_load(t)
+            return False
+        return bool(np.all(np.isfinite(rate.x.array)))
 
 
 def _extrapolate(points, t: float) -> np.ndarray:
@@ -274,8 +308,10 @@ class StepSettings:
     max_cutbacks: int = 6
     easy_its: int = 8
     grow_after: int = 1
-    predictor: bool | int = False  # extrapolate the start of an increment from the converged ones:
-                                   # True or 1 linear, 2 quadratic; hurts thin rotating bodies
+    predictor: bool | int | str = False  # where an increment starts: False the last converged state;
+                                   # True or 1, 2 its linear, quadratic extrapolation (hurts thin
+                                   # rotating bodies); "tangent" the Euler step along the path
+    chord_tol: float = 0.1         # "tangent": take the last chord instead when |v - c| > chord_tol |c|
 
 
 @dataclass
@@ -314,6 +350,19 @@ class IncrementalSolver:
         self.newton = Newton(model, newton, self.timer)
         self.max_passes = max([getattr(t, "max_passes", 1) for t in model.boundary_terms] + [1])
 
+    def _agrees_with_chord(self, rate: fem.Function, past) -> bool:
+        """Whether the path's tangent ``rate`` at the newest state lies within ``chord_tol`` of the
+        chord of the last increment, |v - c| <= chord_tol |c|. Near a mechanism (a ring of plastic
+        hinges) the tangent is almost singular and its solution can carry a spurious part along it;
+        the predictor then takes the chord (linear extrapolation) instead."""
+        (t0, u0), (t1, u1) = past[-2:]
+        chord = (u1 - u0) / (t1 - t0)
+        imap = self.model.V.dofmap.index_map
+        n = imap.size_local * self.model.V.dofmap.index_map_bs
+        local = np.array([np.sum((rate.x.array[:n] - chord[:n]) ** 2), np.sum(chord[:n] ** 2)])
+        diff2, chord2 = self.model.comm.allreduce(local, op=MPI.SUM)
+        return bool(diff2 <= self.steps.chord_tol ** 2 * chord2)
+
     def run(self, callbacks=(), progress=None) -> RunResult:
         """Run the increments; each callback(model, increment) is called after every converged one.
 
@@ -323,7 +372,11 @@ class IncrementalSolver:
         dt_nom = st.t_end / st.n_steps
         dt, t, step, cut, easy = dt_nom, 0.0, 0, 0, 0
         past = [(0.0, m.u.x.array.copy())]          # converged (load, u), newest last
-        order = int(st.predictor)
+        tangent = st.predictor == "tangent"
+        if isinstance(st.predictor, str) and not tangent:
+            raise ValueError(f"predictor = {st.predictor!r}: choose 0, 1, 2 or tangent")
+        order = 0 if tangent else int(st.predictor)
+        rate, have_rate = (fem.Function(m.V), False) if tangent else (None, False)
         result = RunResult()
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
@@ -333,6 +386,10 @@ class IncrementalSolver:
             m.set_load(t_try)
             if order and len(past) > 1:
                 m.u.x.array[:] = _extrapolate(past[-(order + 1):], t_try)
+            elif have_rate:
+                m.u.x.array[:] = m.u_n.x.array + (t_try - t) * rate.x.array
+            elif tangent and len(past) > 1:
+                m.u.x.array[:] = _extrapolate(past[-2:], t_try)
             ok, its, reason = self.newton.solve()
             passes = 1
             while ok and passes < self.max_passes and any([term.relag_pass(m) for term in
@@ -362,6 +419,10 @@ class IncrementalSolver:
                     cb(m, inc)
             m.commit()
             past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
+            if tangent:
+                past = past[-1:] + [(t, m.u_n.x.array.copy())]
+                have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
+                             and self._agrees_with_chord(rate, past))
             if progress is not None:
                 progress.update(dt)
             t_mark = time.perf_counter()

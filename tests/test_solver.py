@@ -1,4 +1,5 @@
-"""Increment control and Newton globalisation: the predictor's extrapolation, the energy line search."""
+"""Increment control and Newton globalisation: the predictors (extrapolation, the path's tangent), the
+energy line search, the force-scaled convergence test."""
 import numpy as np
 import pytest
 from dolfinx import fem
@@ -24,10 +25,11 @@ def test_extrapolation_reproduces_polynomial_paths():
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("predictor", [0, 1])
+@pytest.mark.parametrize("predictor", [0, 1, "tangent"])
 def test_energy_line_search_reaches_the_elastica(predictor):
     """The globalisation changes the path of the iterations, not the solution: with Crisfield's line
-    search (and the linear predictor) the elastica still lands on the closed form at lam = 2."""
+    search (and the linear or the tangent predictor) the elastica still lands on the closed form at
+    lam = 2."""
     scene = get_scene("elastica", ["lam=2", "n_steps=10"])
     model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
     model.finalize()
@@ -47,6 +49,56 @@ def test_unknown_line_search_is_refused():
     assert Newton(model, NewtonSettings(line_search="none")).line_search is None   # as the message offers
     with pytest.raises(ValueError, match="'bogus'"):
         Newton(model, NewtonSettings(scale="bogus"))
+    with pytest.raises(ValueError, match="'bogus'"):
+        IncrementalSolver(model, StepSettings(predictor="bogus")).run()
+
+
+def _norm(f: fem.Function) -> float:
+    return f.vector.norm()
+
+
+@pytest.mark.mpi
+def test_tangent_predictor_is_the_derivative_of_the_path():
+    """The tangent predictor's rate v = -K^-1 dR/dt at a converged state of the elastica (lam = 1) is
+    the derivative of the path: the chords (u(t + h) - u(t)) / h of converged solutions approach it
+    at first order in h (error halves with h; measured 4.5e-2 and 2.2e-2 of |v| for h = 0.1, 0.05, the
+    same on two ranks)."""
+    scene = get_scene("elastica", ["lam=2", "n_steps=5"])
+    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    model.finalize()
+    solver = IncrementalSolver(model, StepSettings(n_steps=5, t_end=0.5), NewtonSettings())
+    assert solver.run().completed
+    rate = fem.Function(model.V)
+    assert solver.newton.load_rate(0.5, rate, 1e-6)
+    u1 = model.u_n.x.array.copy()
+    err = {}
+    for h in (0.1, 0.05):
+        model.restore()
+        model.set_load(0.5 + h)
+        ok, _, reason = solver.newton.solve()
+        assert ok, reason
+        chord = fem.Function(model.V)
+        chord.x.array[:] = (model.u.x.array - u1) / h - rate.x.array
+        err[h] = _norm(chord) / _norm(rate)
+    assert err[0.1] < 0.1
+    assert err[0.05] / err[0.1] == pytest.approx(0.5, abs=0.1)
+
+
+def test_tangent_predictor_falls_back_to_the_chord():
+    """A tangent that strays from the last chord by more than chord_tol (a spurious part along a
+    near-mechanism) is not used: the check accepts 5 % and refuses 20 % with chord_tol = 0.1."""
+    scene = get_scene("elastica", ["n_steps=1"])
+    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    model.finalize()
+    solver = IncrementalSolver(model, StepSettings(predictor="tangent", chord_tol=0.1))
+    rng = np.random.default_rng(1)
+    u0, u1 = np.zeros_like(model.u.x.array), rng.standard_normal(model.u.x.array.size)
+    past = [(0.0, u0), (0.5, u1)]
+    chord = 2.0 * u1
+    rate = fem.Function(model.V)
+    for factor, ok in ((1.05, True), (1.2, False), (0.8, False)):
+        rate.x.array[:] = factor * chord
+        assert solver._agrees_with_chord(rate, past) is ok
 
 
 @pytest.mark.mpi
