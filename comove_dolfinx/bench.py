@@ -193,7 +193,7 @@ def ring(out: pathlib.Path, factors=(1.0, 0.5, 2.0)) -> list[dict]:
     return rows
 
 
-RING_STEPS = (10, 20, 30, 60, 120)
+RING_STEPS = (10, 20, 30, 36, 60, 120)   # 36: the scene's default
 
 
 def ring_steps(out: pathlib.Path, steps=RING_STEPS) -> list[dict]:
