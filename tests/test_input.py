@@ -18,6 +18,7 @@ from comove_dolfinx.scenes import SceneError, get_scene
     (["colour=red"], ["colour", "parameters"]),
     (["lam"], ["key=value"]),
     (["n_steps=ten"], ["n_steps", "int"]),
+    (["predictor=secant"], ["predictor", "secant", "tangent"]),
 ])
 def test_bad_parameters(pairs, words):
     with pytest.raises((SceneError, MaterialError)) as err:
