@@ -65,25 +65,38 @@ def elastica(out: pathlib.Path, updates=None, steps=(1, 2, 3, 4, 5, 10, 20)) -> 
     return rows
 
 
-def _plot_elastica(out, rows):
+def _plot_panels(path: pathlib.Path, rows: list[dict], group: str, panels: list[dict]) -> None:
+    """One figure with a panel per entry of ``panels`` and in each a curve per value of
+    ``row[group]``; a panel gives x and y (functions of a row), labels, scales, optional hline."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
-    for name in dict.fromkeys(r["update"] for r in rows):
-        rs = [r for r in rows if r["update"] == name and r["converged"]]
-        a1.loglog([r["increments"] for r in rs], [max(abs(r["error_percent"]), 1e-3) for r in rs],
-                  "o-", label=name)
-        a2.loglog([r["wall_s"] for r in rs], [max(abs(r["error_percent"]), 1e-3) for r in rs],
-                  "o-", label=name)
-    a1.axhline(1.0, color="grey", lw=0.8, ls="--")
-    a1.set(xlabel="increments", ylabel="|tip deflection error| [%]",
-           title="elastica, lam = 5 (error floor 1e-3 %)")
-    a2.set(xlabel="wall time of the increments [s]", ylabel="|tip deflection error| [%]")
-    a1.legend()
+    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4))
+    for key in dict.fromkeys(r[group] for r in rows):
+        rs = [r for r in rows if r[group] == key]
+        for ax, p in zip(axes, panels):
+            ax.plot([p["x"](r) for r in rs], [p["y"](r) for r in rs], "o-", label=f"{group} {key:g}"
+                    if isinstance(key, float) else str(key))
+    for ax, p in zip(axes, panels):
+        ax.set(xscale=p.get("xscale", "linear"), yscale=p.get("yscale", "linear"),
+               xlabel=p["xlabel"], ylabel=p["ylabel"], title=p.get("title", ""))
+        if "hline" in p:
+            ax.axhline(p["hline"], color="grey", lw=0.8, ls="--")
+    axes[0].legend()
     fig.tight_layout()
-    fig.savefig(out / "elastica_increments.png", dpi=120)
+    fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def _plot_elastica(out, rows):
+    def err(r):
+        return max(abs(r["error_percent"]), 1e-3)
+    label = "|tip deflection error| [%]"
+    _plot_panels(out / "elastica_increments.png", [r for r in rows if r["converged"]], "update", [
+        dict(x=lambda r: r["increments"], y=err, xscale="log", yscale="log", hline=1.0,
+             xlabel="increments", ylabel=label, title="elastica, lam = 5 (error floor 1e-3 %)"),
+        dict(x=lambda r: r["wall_s"], y=err, xscale="log", yscale="log",
+             xlabel="wall time of the increments [s]", ylabel=label)])
 
 
 def _run(name: str, sets: list[str], out: pathlib.Path, tag: str,
@@ -290,23 +303,12 @@ def ring_tolerance(out: pathlib.Path, steps=RING_TOLERANCE_STEPS, rtols=RING_TOL
 
 
 def _plot_tolerance(out, rows):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
-    for rtol in dict.fromkeys(r["rtol"] for r in rows):
-        rs = [r for r in rows if r["rtol"] == rtol]
-        a1.plot([r["n_steps"] for r in rs], [r["newton_mean"] for r in rs], "o-", label=f"rtol {rtol:g}")
-        a2.semilogy([r["n_steps"] for r in rs], [max(r["max_dP_percent"], 1e-4) for r in rs], "o-",
-                    label=f"rtol {rtol:g}")
-    a1.axhline(5.0, color="grey", lw=0.8, ls="--")
-    a1.set(xlabel="nominal increments", ylabel="Newton iterations per increment (mean)",
-           title="ring crush")
-    a2.set(xlabel="nominal increments", ylabel=f"largest |P - P(rtol {RING_TIGHT:g})| / P [%]")
-    a1.legend()
-    fig.tight_layout()
-    fig.savefig(out / "ring_tolerance.png", dpi=120)
-    plt.close(fig)
+    _plot_panels(out / "ring_tolerance.png", rows, "rtol", [
+        dict(x=lambda r: r["n_steps"], y=lambda r: r["newton_mean"], hline=5.0,
+             xlabel="nominal increments", ylabel="Newton iterations per increment (mean)",
+             title="ring crush"),
+        dict(x=lambda r: r["n_steps"], y=lambda r: max(r["max_dP_percent"], 1e-4), yscale="log",
+             xlabel="nominal increments", ylabel=f"largest |P - P(rtol {RING_TIGHT:g})| / P [%]")])
 
 
 def main(argv=None) -> int:
