@@ -466,10 +466,10 @@ class Ring(ContactScene):
         # Travelling plastic hinges: the first corrections of an increment overshoot (points at the
         # hinges' borders switch between loading and unloading, free boundary points swing into
         # the plate); Crisfield's energy line search scales them back. Convergence: out-of-balance
-        # force below 1e-3 of the forces carried (||F_int||): P within 0.002 % of a run converged to
-        # 1e-6 (at worst 0.36 % in one increment; bench ring_tolerance), where 5e-3 puts up to 1.3 %
-        # into P. gamma0 = 0.1 would save an iteration per increment, but its penetration (2.6e-3)
-        # delays the crown's lift-off from delta = 1.45 to 1.57 (bench ring_newton).
+        # force below 1e-3 of the forces carried (||F_int||): P within 0.003 % of a run converged to
+        # 1e-6 (0.06 % at 40 increments; bench ring_tolerance), where 5e-3 puts up to 2.2 % into P.
+        # gamma0 = 0.1 would take 3.9 iterations per increment instead of 4.4, but its penetration
+        # (2.5e-3) delays the crown's lift-off from delta = 1.49 to 1.55 (bench ring_newton).
         return NewtonSettings(line_search="energy", energy_eta=0.2, scale="force", rtol=1e-3)
 
     def mesh_data(self, comm):

@@ -261,7 +261,6 @@ class Newton:
         converged = self._converged(rnorm)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
 
-
     def load_rate(self, t: float, rate: fem.Function, eps: float) -> bool:
         """The path's tangent at the current state and load factor t into ``rate``: K v = -dR/dt with
         the last factorised tangent K and dR/dt = (R(t + eps) - R(t)) / eps; False (rate untouched)
@@ -377,8 +376,9 @@ class IncrementalSolver:
         tangent = st.predictor == "tangent"
         if isinstance(st.predictor, str) and not tangent:
             raise ValueError(f"predictor = {st.predictor!r}: choose 0, 1, 2 or tangent")
-        order = 0 if tangent else int(st.predictor)
-        rate, have_rate = (fem.Function(m.V), False) if tangent else (None, False)
+        # the tangent keeps the last two states: its fallback is the linear extrapolation (the chord)
+        order = 1 if tangent else int(st.predictor)
+        rate, have_rate = fem.Function(m.V) if tangent else None, False
         result = RunResult()
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
@@ -386,12 +386,10 @@ class IncrementalSolver:
             dt = min(dt, st.t_end - t)
             t_try = t + dt
             m.set_load(t_try)
-            if order and len(past) > 1:
-                m.u.x.array[:] = _extrapolate(past[-(order + 1):], t_try)
-            elif have_rate:
+            if have_rate:
                 m.u.x.array[:] = m.u_n.x.array + (t_try - t) * rate.x.array
-            elif tangent and len(past) > 1:
-                m.u.x.array[:] = _extrapolate(past[-2:], t_try)
+            elif order and len(past) > 1:
+                m.u.x.array[:] = _extrapolate(past[-(order + 1):], t_try)
             ok, its, reason = self.newton.solve()
             passes = 1
             while ok and passes < self.max_passes and any([term.relag_pass(m) for term in
@@ -422,7 +420,6 @@ class IncrementalSolver:
             m.commit()
             past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
             if tangent:
-                past = past[-1:] + [(t, m.u_n.x.array.copy())]
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
                              and self._agrees_with_chord(rate, past))
             if progress is not None:

@@ -53,10 +53,6 @@ def test_unknown_line_search_is_refused():
         IncrementalSolver(model, StepSettings(predictor="bogus")).run()
 
 
-def _norm(f: fem.Function) -> float:
-    return f.vector.norm()
-
-
 @pytest.mark.mpi
 def test_tangent_predictor_is_the_derivative_of_the_path():
     """The tangent predictor's rate v = -K^-1 dR/dt at a converged state of the elastica (lam = 1) is
@@ -79,7 +75,7 @@ def test_tangent_predictor_is_the_derivative_of_the_path():
         assert ok, reason
         chord = fem.Function(model.V)
         chord.x.array[:] = (model.u.x.array - u1) / h - rate.x.array
-        err[h] = _norm(chord) / _norm(rate)
+        err[h] = chord.vector.norm() / rate.vector.norm()
     assert err[0.1] < 0.1
     assert err[0.05] / err[0.1] == pytest.approx(0.5, abs=0.1)
 
