@@ -248,17 +248,20 @@ class Contact:
             slip = ufl.dot(t_o, (u - u_n) - (self.obstacle._d - self._d_n))
             if self.method == "penalty":
                 self.e_n = fem.Function(fem.FunctionSpace(msh, ("CG", model.degree)), name="stick_slip")
-                q_tr = _clip(gamma * (self.e_n + slip), s)
+                trial = gamma * (self.e_n + slip)
+                q_tr = _clip(trial, s)
                 self.q_ref = -q_tr
                 self._e_new = q_tr / gamma
                 R = R + q_tr * ufl.dot(t_o, v)
             else:
                 q_u = ufl.dot(t_o, PN)
-                q = _clip(q_u - gamma * slip, s)
+                trial = q_u - gamma * slip
+                q = _clip(trial, s)
                 dq = ufl.derivative(q_u, u, v)
                 self.q_ref = q
                 R = R + (-th / gamma * q_u * dq if th else 0) + q / gamma * (th * dq - gamma * ufl.dot(t_o, v))
             self._p_lag = p_lag
+            self._slipping = ufl.gt(abs(trial), s)       # where the friction law slips
         self.R_c = R * w * dsc
         self._build_outputs(model, n_o, t_o)
         return self.R_c
@@ -314,6 +317,12 @@ class Contact:
         T = ufl.as_vector([-N[1], N[0]])
         chi = ufl.conditional(ufl.gt(self.p_ref, 0.0), 1.0, 0.0)
         self._extent_form = fem.form(chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * self.ds_c)
+        # reference length of the contact set that slips (friction at its threshold) and sticks
+        self._slip_form = None
+        if self.mu > 0:
+            slipping = ufl.conditional(self._slipping, 1.0, 0.0)
+            self._slip_form = fem.form(chi * slipping * self.ds_c)
+            self._stick_form = fem.form(chi * (1.0 - slipping) * self.ds_c)
         self._p_form = fem.form(self.p_ref / stretch * phi * self.ds_c)
         self._q_form = fem.form(self.q_ref / stretch * phi * self.ds_c) if self.q_ref is not None else None
         self._p_lag_form = fem.form(self._p_lag * phi * self.ds_c) if self.mu > 0 else None
@@ -377,6 +386,15 @@ class Contact:
         comm = self.model.comm
         return (np.concatenate(comm.allgather(X)),
                 np.concatenate(comm.allgather(f.x.array[self._sdofs])))
+
+    def stick_slip(self) -> tuple[float, float]:
+        """Reference lengths of the contact set where friction sticks and where it slips (zeros
+        without friction), at the current iterate."""
+        if self._slip_form is None:
+            return 0.0, 0.0
+        comm = self.model.comm
+        return tuple(comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM)
+                     for f in (self._stick_form, self._slip_form))
 
     def zone(self) -> ZoneInfo:
         """Contact extent (from the facet quadrature points) and the largest nodal penetration."""

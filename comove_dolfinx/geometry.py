@@ -141,10 +141,10 @@ def _build(builder: str, params: dict, construct: Callable[[], None], comm: MPI.
     path = _cache_path(builder, params, cache_dir)
     error = None
     if comm.rank == 0 and not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.msh")  # gmsh wants the .msh suffix
         _start_gmsh()
         try:
+            path.parent.mkdir(parents=True, exist_ok=True)
             gmsh.model.add(builder)
             construct()
             gmsh.model.mesh.generate(2)

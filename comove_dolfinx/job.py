@@ -19,6 +19,7 @@ from mpi4py import MPI
 from tqdm import tqdm
 
 from .output import History, XDMFOutput
+from .parallel import on_root
 from .scenes import Scene
 from .solver import IncrementalSolver, NewtonSettings, RunResult, StepSettings, Timer
 
@@ -40,9 +41,7 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
     the history row is written, before the state is committed), e.g. to take snapshots for plots.
     """
     out = pathlib.Path(out_dir)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
+    on_root(comm, out.mkdir, parents=True, exist_ok=True)
     timer = Timer()
     t_start = time.perf_counter()
     with timer("mesh"):
@@ -105,12 +104,11 @@ def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
         else:
             _print(comm, f"first contact at load {stats['first_contact_load']:.5g}; largest "
                          f"penetration {stats['max_penetration']:.3g}")
-    if comm.rank == 0:
-        info = {"scene": scene.name, "parameters": dataclasses.asdict(scene),
-                "completed": result.completed, "message": result.message,
-                "increments": len(its), "newton_its": its,
-                "failed_its": sum(i.failed_its for i in result.increments),
-                "dofs": model.num_dofs(), "ranks": comm.size, "wall_s": wall,
-                "timing": dict(timer.totals), **(stats if contacts else {})}
-        (out / "run.json").write_text(json.dumps(info, indent=1))
+    info = {"scene": scene.name, "parameters": dataclasses.asdict(scene),
+            "completed": result.completed, "message": result.message,
+            "increments": len(its), "newton_its": its,
+            "failed_its": sum(i.failed_its for i in result.increments),
+            "dofs": model.num_dofs(), "ranks": comm.size, "wall_s": wall,
+            "timing": dict(timer.totals), **(stats if contacts else {})}
+    on_root(comm, (out / "run.json").write_text, json.dumps(info, indent=1))
     return result

@@ -29,6 +29,7 @@ from .material_data import (MODELS, ONE, PDEV, WEIGHT, Elastic, Hardening, Mater
                             check_model, check_plane_stress, ddot, deviator, von_mises)
 
 __all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_update", "deviator", "j2_return",
+           "plane_stress_thickness",
            "von_mises"]
 
 
@@ -287,3 +288,36 @@ def chen_update(sig_rot: ArrayLike, sig_tr: ArrayLike, p_n: ArrayLike, elastic: 
             D[:, 2, :] = 0.0
             D[:, :, 2] = 0.0
     return sig, p, D_tr, D_rot, deps_p
+
+
+def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndarray, D: np.ndarray,
+                           D_rot: np.ndarray | None, elastic: Elastic
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Thickness strain of a plane-stress increment and its derivatives (any law with sigma_zz = 0).
+
+    Both laws of this module end with sig = sig_tr - C_ps deps_p on the in-plane components, with a
+    deviatoric (volume-preserving) plastic strain increment; so deps_p = C_ps^-1 (sig_tr - sig) in plane
+    and deps_p_zz = -(deps_p_xx + deps_p_yy) = -(1 - nu)/E tr2(sig_tr - sig), tr2 = xx + yy. Adding the
+    elastic part -nu/E tr2(sig - sig_rot), the logarithmic thickness strain of the increment is
+
+        ezz = -nu/E tr2(sig - sig_rot) - (1 - nu)/E tr2(sig_tr - sig),
+
+    and F22 = F22_n exp(ezz). Its derivatives follow from D = d sig / d sig_tr and D_rot = d sig /
+    d sig_rot (zero for J2, whose result does not depend on sig_rot apart from sig_tr).
+
+    Returns
+    -------
+    ezz : (N,)
+    dezz_dtr, dezz_drot : (N, 4)
+        d ezz / d sig_tr and d ezz / d sig_rot (zz entries zero).
+    """
+    E, nu = elastic.E, elastic.nu
+    tr2 = lambda a: a[..., 0] + a[..., 1]          # noqa: E731
+    ezz = -nu / E * tr2(sig - sig_rot) - (1.0 - nu) / E * tr2(sig_tr - sig)
+    e = np.array([1.0, 1.0, 0.0, 0.0])
+    rows = lambda M: M[:, 0, :] + M[:, 1, :]       # noqa: E731  d tr2(sig) / d input
+    dtr = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
+    drot = nu / E * e + (0.0 if D_rot is None else (1.0 - 2.0 * nu) / E * rows(D_rot))
+    drot = np.broadcast_to(drot, dtr.shape).copy()
+    dtr[:, 2] = drot[:, 2] = 0.0
+    return ezz, dtr, drot

@@ -25,11 +25,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import ufl
+from ufl.algorithms import expand_derivatives
 from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import materials as mat
+from . import materials_ufl as mat_ufl
+from .parallel import agree
 from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
 from .quadrature import CellInterpolator, QuadratureRule
 from .updates import make_update
@@ -65,6 +69,18 @@ class _Ramp:
     def set(self, t: float) -> None:
         val = self.scale(t) if callable(self.scale) else np.asarray(self.scale) * t
         self.constant.value = val
+
+
+@dataclass
+class _FieldRamp:
+    """A displacement field that moves with the load factor: g = displacement(x, t)."""
+
+    function: fem.Function
+    displacement: object
+
+    def set(self, t: float) -> None:
+        self.function.interpolate(lambda x: self.displacement(x, t))
+        self.function.x.scatter_forward()
 
 
 @dataclass
@@ -134,10 +150,14 @@ class Model:
         self.p = r.function((), "p") if plasticity else None
         self.D = r.function((4, 4), "D") if plasticity else None
         self.D_rot = r.function((4, 4), "D_rot") if plasticity and plasticity.law == "chen" else None
-        self.F22_n = self.F22_q = None
+        # plane-stress plasticity: the thickness stretch is state, F22 = F22_n exp(ezz), with the
+        # derivatives of ezz with respect to the trial and the rotated old stress (materials.py)
+        self.F22_n = self.F22_q = self.G_tr = self.G_rot = None
         if plasticity and kind == PLANE_STRESS:
             self.F22_n = r.function((), "F22_n", 1.0)
             self.F22_q = r.function((), "F22", 1.0)
+            self.G_tr = r.function((4,), "dezz_dtr")
+            self.G_rot = r.function((4,), "dezz_drot")
 
         self.ds = ufl.Measure("ds", domain=msh, subdomain_data=meshdata.facet_tags)
         self._dirichlet: list[_Dirichlet] = []
@@ -171,6 +191,44 @@ class Model:
         if ramp:
             self._ramps.append(ramp)
         self._dirichlet.append(_Dirichlet(name, component, ramp, bc))
+
+    def prescribe(self, name: str, displacement, component: int | None = None) -> None:
+        """Dirichlet condition u = displacement(x, t) (or u[component]) on a tagged boundary: a
+        field, ``displacement(x, t)`` returning (2, N) values (or (N,) for a component) at the points
+        x (3, N) for load factor t."""
+        facets = self._facets(name)
+        fdim = self.mesh.topology.dim - 1
+        if component is None:
+            g = fem.Function(self.V)
+            dofs = fem.locate_dofs_topological(self.V, fdim, facets)
+            bc = fem.dirichletbc(g, dofs)
+        else:
+            Vc = self.V.sub(component).collapse()[0]
+            g = fem.Function(Vc)
+            dofs = fem.locate_dofs_topological((self.V.sub(component), Vc), fdim, facets)
+            bc = fem.dirichletbc(g, dofs, self.V.sub(component))
+        ramp = _FieldRamp(g, displacement)
+        self._ramps.append(ramp)
+        self._dirichlet.append(_Dirichlet(name, component, ramp, bc))
+
+    def reaction_forces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """Reference positions (n, 2) and forces (n, 2) that the supports exert on the nodes of a
+        tagged boundary (this rank's owned nodes), taken from the residual at the current state:
+        at a constrained dof R = f_int - f_ext is the force the support must supply."""
+        b = fem_petsc.assemble_vector(self.residual_form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fdim = self.mesh.topology.dim - 1
+        dofs = fem.locate_dofs_topological(self.V.sub(0), fdim, self._facets(name))
+        bs = self.V.dofmap.index_map_bs
+        nodes = np.unique(dofs // bs)
+        nodes = nodes[nodes < self.V.dofmap.index_map.size_local]
+        f = b.array.reshape(-1, bs)[nodes].copy()
+        b.destroy()
+        return self.V.tabulate_dof_coordinates()[nodes, :2], f
+
+    def reaction(self, name: str) -> np.ndarray:
+        """Total force (x, y) that the supports exert on a tagged boundary (all ranks)."""
+        return self.comm.allreduce(self.reaction_forces(name)[1].sum(axis=0), op=MPI.SUM)
 
     def follower_pressure(self, name: str, magnitude) -> fem.Constant:
         """Pressure t * magnitude on the current face of a tagged boundary (pushes into the body)."""
@@ -225,15 +283,24 @@ class Model:
             R = R - ext
         for term in self.boundary_terms:
             R = R + term.residual(self)
-        dsig = ufl.derivative(up.sigma, u, self.u_trial)
+        # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
+        # (+ D_rot d sigma_rot) and, in plane-stress plasticity, the thickness stretch's part
+        # dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot)
+        dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
+        dsig = to_tensor(dsig_tr)
         if self.plasticity is not None:
-            dvec = ufl.dot(self.D, to_vec(dsig))
+            dsig_rot = to_vec(ufl.derivative(up.sigma_rot, u, self.u_trial))
+            dvec = ufl.dot(self.D, dsig_tr)
             if self.D_rot is not None:
-                dvec = dvec + ufl.dot(self.D_rot, to_vec(ufl.derivative(up.sigma_rot, u,
-                                                                        self.u_trial)))
+                dvec = dvec + ufl.dot(self.D_rot, dsig_rot)
             dsig = to_tensor(dvec)
         Jac = ufl.derivative(R, u, self.u_trial) + \
             ufl.inner(J * dsig * ufl.inv(F).T, self.kin.grad3(v)) * w * dx
+        if self.F22_q is not None:
+            # the direction of a derivative must be free of unevaluated derivatives
+            dF22 = expand_derivatives(self.F22_q * (ufl.dot(self.G_tr, dsig_tr)
+                                                    + ufl.dot(self.G_rot, dsig_rot)))
+            Jac = Jac + ufl.derivative(ufl.inner(P, self.kin.grad3(v)) * w * dx, self.F22_q, dF22)
         params = {"jit_params": jit_params or {}}
         self.residual_form = fem.form(R, **params)
         self.jacobian_form = fem.form(Jac, **params)
@@ -262,33 +329,44 @@ class Model:
 
     def nominal_traction(self, N, u=None):
         """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the
-        current one), for Nitsche terms: facet integrals cannot see quadrature functions, so the
-        stored stress enters through a cell-wise DG fit (exact for DG1 and the 3-point rule) and the
-        update is re-expressed on it."""
+        current one), for Nitsche terms. Facet integrals cannot see quadrature functions, so the
+        constitutive update is evaluated at the facet's points as a UFL function of u: the stress
+        update's trial stress from the converged state of the last increment (carried by cell-wise
+        DG fits, exact for DG1 and the 3-point rule), and for elastic-plastic bodies the return map
+        of materials_ufl with the converged plastic strain (and thickness stretch). Everything that
+        varies within an increment is a function of u, so the facet term's Jacobian is exact, and
+        the traction at a lag state u_lag depends on u_lag and committed state only."""
         u = self.u if u is None else u
         up = self.update.build(u, self.u_n, self._facet_state("sigma_n"))
-        sig = up.sigma
-        if self.plasticity is not None:
-            sig = sig + to_tensor(self._facet_state("plastic_correction"))
-        if self.kin.model == PLANE_STRESS:
-            F22 = self._facet_state("F22") if self.F22_q is not None else up.F22
-            F = self.kin.F3(u, F22)
-        else:
-            F = self.kin.F3(u)
+        sig, F22 = up.sigma, up.F22
+        plast = self.plasticity
+        if plast is not None:
+            p_n = ufl.max_value(self._facet_state("p_n"), 0.0)     # the fit may dip below 0
+            e, hard = self.elastic, plast.hardening
+            if plast.law == "chen":
+                sig = mat_ufl.chen_update(up.sigma_rot, up.sigma, p_n, e, hard, self.kin.model)
+            elif self.kin.model == PLANE_STRESS:
+                sig = mat_ufl.j2_return_plane_stress(up.sigma, p_n, e, hard)
+            else:
+                sig = mat_ufl.j2_return(up.sigma, p_n, e, hard)
+            if self.kin.model == PLANE_STRESS:
+                ezz = mat_ufl.plane_stress_thickness(sig, up.sigma, up.sigma_rot, e)
+                F22 = self._facet_state("F22_n") * ufl.exp(ezz)
+        F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
         PN = ufl.det(F) * sig * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0.0])
         return ufl.as_vector([PN[0], PN[1]])
 
     def _facet_state(self, name: str):
-        """DG function holding a cell-wise fit of quadrature data ``name`` (created on first use):
-        "sigma_n" and "plastic_correction" (4-vectors), "F22" (scalar)."""
+        """DG function holding a cell-wise fit of the converged quadrature state ``name`` (created
+        on first use, refreshed at each commit): "sigma_n" (4-vector), "p_n", "F22_n" (scalars)."""
         if name not in self._facet:
-            scalar = name == "F22"
+            scalar = name in ("p_n", "F22_n")
             k = max(self.degree - 1, 0)
             cell = self.mesh.ufl_cell()
             el = (ufl.FiniteElement("DG", cell, k) if scalar else
                   ufl.VectorElement("DG", cell, k, dim=4))
             f = fem.Function(fem.FunctionSpace(self.mesh, el), name=name + "_dg")
-            if scalar:
+            if name == "F22_n":
                 f.x.array[:] = 1.0
             self._facet[name] = (f, CellInterpolator(self.rule, f.function_space))
         return self._facet[name][0]
@@ -313,19 +391,26 @@ class Model:
     def evaluate_stress(self) -> None:
         """Stress (and tangent) at every quadrature point for the current displacement iterate.
 
-        Raises :class:`InvertedElement` (on every rank) if det F <= 0 anywhere and
-        :class:`ReturnMapFailure` if the update is not defined (NaN).
+        Raises, on every rank when it happens on any: :class:`InvertedElement` if det F <= 0 at a
+        point, :class:`ReturnMapFailure` if the update is not defined (NaN) or the return map fails.
         """
+        err = None
+        try:
+            self._evaluate_local()
+        except (InvertedElement, ReturnMapFailure) as e:
+            err = e
+        except Exception as e:                 # noqa: BLE001 - e.g. a return map that did not converge
+            err = ReturnMapFailure(f"the constitutive update failed: {e}")
+        agree(self.comm, err)
+
+    def _evaluate_local(self) -> None:
+        """The constitutive stage on this rank's points (no collective call)."""
         vals = self.rule.evaluate(self._eval)
         detF = vals[:, -1]
-        bad_local = float(np.nanmin(detF)) if detF.size else np.inf
         if not np.all(np.isfinite(vals)):
-            bad_local = -np.inf
-        bad = self.comm.allreduce(bad_local, op=MPI.MIN)
-        if bad == -np.inf:
             raise ReturnMapFailure("the stress update returned NaN (increment too large?)")
-        if bad <= 0.0:
-            raise InvertedElement(f"det F = {bad:.3g} <= 0 at a quadrature point")
+        if detF.size and detF.min() <= 0.0:
+            raise InvertedElement(f"det F = {detF.min():.3g} <= 0 at a quadrature point")
         sig_tr = vals[:, 0:4]
         col = 4
         sig = self.rule.view(self.sigma)
@@ -337,15 +422,12 @@ class Model:
             self._plastic_update(sig_rot, sig_tr)
         if self._state_new is not None:
             self._state_new[:] = vals[:, col:col + 4]
-        if self.plasticity is not None:
-            self._fit_facet("plastic_correction", self.cauchy_stress() - sig_tr)
-            if self.F22_q is not None:
-                self._fit_facet("F22", self.F22_q.x.array)
 
     def _plastic_update(self, sig_rot, sig_tr) -> None:
         plast = self.plasticity
         kind = self.kin.model
         p_n = self.p_n.x.array
+        D_rot = None
         if plast.law == "j2":
             sig, p, D, deps_p = mat.j2_return(sig_tr, p_n, self.elastic, plast.hardening, kind)
         else:
@@ -356,11 +438,10 @@ class Model:
         self.p.x.array[:] = p
         self.rule.view(self.D)[:] = D
         if self.F22_q is not None:
-            # thickness strain: elastic part by the plane-stress compliance, plastic part incompressible
-            e = self.elastic
-            dsig = sig - sig_rot
-            deps_zz = -e.nu / e.E * (dsig[:, 0] + dsig[:, 1]) + deps_p[:, 2]
-            self.F22_q.x.array[:] = self.F22_n.x.array * np.exp(deps_zz)
+            ezz, dtr, drot = mat.plane_stress_thickness(sig, sig_tr, sig_rot, D, D_rot, self.elastic)
+            self.F22_q.x.array[:] = self.F22_n.x.array * np.exp(ezz)
+            self.rule.view(self.G_tr)[:] = dtr
+            self.rule.view(self.G_rot)[:] = drot
 
     def commit(self) -> None:
         """Accept the current iterate as the converged state of the increment."""
@@ -376,6 +457,10 @@ class Model:
             if self.F22_q is not None:
                 self.F22_n.x.array[:] = self.F22_q.x.array
         self._fit_facet("sigma_n", self.rule.view(self.sigma_n))
+        if self.plasticity is not None:
+            self._fit_facet("p_n", self.p_n.x.array)
+            if self.F22_n is not None:
+                self._fit_facet("F22_n", self.F22_n.x.array)
 
     def restore(self) -> None:
         """Return to the last converged state (after a failed increment)."""

@@ -20,6 +20,7 @@ from dolfinx import fem, io
 from mpi4py import MPI
 
 from .kinematics import fibre_stress, to_tensor
+from .parallel import on_root
 
 
 class Probe:
@@ -47,27 +48,32 @@ class Probe:
 
 
 class History:
-    """CSV with one row per converged increment, written by rank 0 and flushed at once."""
+    """CSV with one row per converged increment, written by rank 0 and flushed at once (a failure
+    to write is raised on every rank)."""
 
     def __init__(self, path: pathlib.Path, columns: list[str], comm=MPI.COMM_WORLD):
         self.columns = list(columns)
         self.rows: list[dict] = []
         self.comm = comm
         self._fh = None
-        if comm.rank == 0:
-            self._fh = open(path, "w", newline="")
-            self._writer = csv.writer(self._fh)
-            self._writer.writerow(self.columns)
-            self._fh.flush()
+        on_root(comm, self._open, path)
+
+    def _open(self, path) -> None:
+        self._fh = open(path, "w", newline="")
+        self._writer = csv.writer(self._fh)
+        self._writer.writerow(self.columns)
+        self._fh.flush()
+
+    def _write(self, values: dict) -> None:
+        self._writer.writerow([_fmt(values[c]) for c in self.columns])
+        self._fh.flush()
 
     def append(self, **values) -> None:
         missing = set(self.columns) - set(values)
         if missing:
             raise KeyError(f"history row lacks {sorted(missing)}")
         self.rows.append(values)
-        if self._fh is not None:
-            self._writer.writerow([_fmt(values[c]) for c in self.columns])
-            self._fh.flush()
+        on_root(self.comm, self._write, values)
 
     def close(self) -> None:
         if self._fh is not None:

@@ -49,6 +49,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .model import InvertedElement, Model, ReturnMapFailure
+from .parallel import collective, first_failure
 
 log = logging.getLogger("comove")
 
@@ -135,6 +136,25 @@ class Newton:
             fem_petsc.set_bc(b, m.bcs, m.u.vector, -1.0)
             b.scale(-1.0)
         return b.norm()
+
+    def _solve_linear(self) -> str | None:
+        """Solve J du = -R into model.du; None, or why it failed (the same on every rank: an error
+        raised on one rank's part of the solve becomes every rank's failure)."""
+        err = None
+        try:
+            self.ksp.solve(self.b, self.model.du.vector)
+        except PETSc.Error as e:
+            err = e
+        failure = first_failure(self.model.comm, err)
+        if failure is None:
+            reason = self.ksp.getConvergedReason()
+            if reason < 0:
+                failure = f"the linear solver failed (PETSc KSP reason {reason})"
+        if failure is not None:
+            self.factorised = False
+            return f"linear solve: {failure}"
+        self.model.du.x.scatter_forward()
+        return None
 
     def force_scale(self) -> float:
         """||F_int|| at the current iterate (stress of the last residual evaluation): the forces
@@ -238,10 +258,13 @@ class Newton:
                 fem_petsc.assemble_matrix(self.A, m.jacobian_form, bcs=m.bcs)
                 self.A.assemble()
             with self.timer("solve"):
-                self.ksp.solve(self.b, m.du.vector)
-                m.du.x.scatter_forward()
+                failure = self._solve_linear()
+            if failure is not None:
+                return False, it, failure
             self.factorised = True
             dnorm = m.du.vector.norm()
+            if not np.isfinite(dnorm):
+                return False, it, "the Newton correction is not finite (singular tangent?)"
             if self.line_search == "energy":
                 self.b.copy(self._b_old)
                 rnorm, alpha, err = self._energy_search(rnorm)
@@ -278,12 +301,18 @@ class Newton:
                 self.residual()
                 rhs.axpy(-1.0, self.b)          # b = -R: rhs = -(R(t + eps) - R(t))
                 rhs.scale(1.0 / eps)
-                self.ksp.solve(rhs, rate.vector)
+                err = None
+                try:
+                    self.ksp.solve(rhs, rate.vector)
+                except PETSc.Error as e:
+                    err = e
+                if first_failure(m.comm, err) is not None or self.ksp.getConvergedReason() < 0:
+                    return False
                 rate.x.scatter_forward()
         except (InvertedElement, ReturnMapFailure):
             m.set_load(t)
             return False
-        return bool(np.all(np.isfinite(rate.x.array)))
+        return bool(m.comm.allreduce(bool(np.all(np.isfinite(rate.x.array))), op=MPI.LAND))
 
 
 def _extrapolate(points, t: float) -> np.ndarray:
@@ -415,8 +444,8 @@ class IncrementalSolver:
             result.increments.append(inc)
             cut, failed_its = 0, 0
             with self.timer("output"):            # before commit: the increment is still visible
-                for cb in callbacks:
-                    cb(m, inc)
+                for cb in callbacks:               # a failure on one rank stops every rank
+                    collective(m.comm, cb, m, inc)
             m.commit()
             past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
             if tangent:

@@ -1,0 +1,142 @@
+"""The material laws of :mod:`comove_dolfinx.materials` written in UFL, for facet integrals.
+
+Quadrature-point state cannot be seen on facets (dolfinx evaluates no quadrature function there), so
+a term on the boundary that needs the stress of an elastic-plastic body (Nitsche contact) evaluates
+the constitutive update itself, at the facet's points, as a UFL function of the displacement: the
+trial stress of the stress update, the plastic state of the last converged increment carried by a
+cell-wise fit, and the return map below. UFL then differentiates it, so the boundary term's Jacobian
+is exact (the derivative of the conditional branches is the consistent tangent).
+
+The functions mirror their NumPy counterparts step for step (same branches, same segment search of
+the hardening table), and the tests check them against each other. Stresses are 3x3 UFL tensors
+(index 2 out of plane, or the hoop direction in axisymmetry); in plane stress their zz entries are 0.
+"""
+from __future__ import annotations
+
+import ufl
+
+from .material_data import Elastic, Hardening
+from .updates import hooke
+
+# floor under squared norms whose square root is taken (its branch is never the selected one there)
+_TINY = 1e-300
+
+
+def sigma_y(hardening: Hardening, p):
+    """Yield stress at equivalent plastic strain p (piecewise linear, its tail slope beyond)."""
+    p0, s0, h = hardening.segments
+    val = s0[-1] + h[-1] * (p - p0[-1])
+    for k in reversed(range(len(p0) - 1)):
+        val = ufl.conditional(ufl.lt(p, p0[k + 1]), s0[k] + h[k] * (p - p0[k]), val)
+    return val
+
+
+def slope(hardening: Hardening, p):
+    """Slope of the segment holding p (right-continuous at the table's points)."""
+    p0, _, h = hardening.segments
+    val = h[-1]
+    for k in reversed(range(len(p0) - 1)):
+        val = ufl.conditional(ufl.lt(p, p0[k + 1]), h[k], val)
+    return val
+
+
+def _solve_dp(hardening: Hardening, q, pn, three_mu):
+    """Root dp of q - 3 mu dp - sigma_y(p_n + dp) = 0: the first segment whose end already makes
+    the residual negative holds it (as Hardening.solve_dp)."""
+    p0, s0, h = hardening.segments
+
+    def on_segment(k):
+        start = ufl.max_value(pn, p0[k])
+        g = q - three_mu * (start - pn) - (s0[k] + h[k] * (start - p0[k]))
+        return start - pn + g / (three_mu + h[k])
+
+    dp = on_segment(len(p0) - 1)
+    for k in reversed(range(len(p0) - 1)):
+        p1 = p0[k + 1]
+        here = ufl.And(ufl.lt(pn, p1), ufl.lt(q - three_mu * (p1 - pn) - s0[k + 1], 0.0))
+        dp = ufl.conditional(here, on_segment(k), dp)
+    return dp
+
+
+def j2_return(sig_tr, p_n, elastic: Elastic, hardening: Hardening):
+    """Radial return of J2 plasticity with isotropic hardening (plane strain, axisymmetry)."""
+    s = ufl.dev(sig_tr)
+    q = ufl.sqrt(ufl.max_value(1.5 * ufl.inner(s, s), _TINY))
+    three_mu = 3.0 * elastic.mu
+    dp = _solve_dp(hardening, q, p_n, three_mu)
+    return ufl.conditional(ufl.gt(q, sigma_y(hardening, p_n)), sig_tr - three_mu * dp / q * s, sig_tr)
+
+
+def j2_return_plane_stress(sig_tr, p_n, elastic: Elastic, hardening: Hardening, newton_steps: int = 12):
+    """Plane-stress J2 return (Simo and Taylor's scalar equation in dgamma, as materials._j2_plane_stress):
+    the hardening segment in closed form, then ``newton_steps`` unrolled Newton steps on that segment
+    from the same start (the function is smooth and monotone there: round-off in fewer than 8)."""
+    E, nu, G = elastic.E, elastic.nu, elastic.mu
+    c1, c2 = E / (3.0 * (1.0 - nu)), 2.0 * G
+    a = sig_tr[0, 0] + sig_tr[1, 1]
+    b = sig_tr[0, 0] - sig_tr[1, 1]
+    t = sig_tr[0, 1]
+    A = 0.25 * a ** 2
+    B = 0.75 * b ** 2 + 3.0 * t ** 2
+    q = ufl.sqrt(ufl.max_value(A + B, _TINY))
+    y_n = sigma_y(hardening, p_n)
+    p0, s0, h = hardening.segments
+    # segment index = number of table points that the root lies beyond
+    count = 0.0
+    for pk, sk in zip(p0[1:], s0[1:]):
+        g = 1.5 * ufl.max_value(pk - p_n, 0.0) / sk
+        seq = ufl.sqrt(A / (1.0 + c1 * g) ** 2 + B / (1.0 + c2 * g) ** 2)
+        count = count + ufl.conditional(ufl.Or(ufl.le(pk, p_n), ufl.ge(seq, sk)), 1.0, 0.0)
+    H, Y0 = h[-1], s0[-1] + h[-1] * (p_n - p0[-1])
+    for k in reversed(range(len(p0) - 1)):
+        below = ufl.lt(count, k + 0.5)
+        H = ufl.conditional(below, h[k], H)
+        Y0 = ufl.conditional(below, s0[k] + h[k] * (p_n - p0[k]), Y0)
+    hi = (q / y_n - 1.0) / c1
+    c = (c1 * A + c2 * B) / ufl.max_value(A + B, _TINY)
+    den0 = c * Y0 + 2.0 / 3.0 * H * q
+    g = ufl.min_value(ufl.max_value((q - Y0) / den0, 0.0), hi)
+    for _ in range(newton_steps):
+        f1, f2 = 1.0 / (1.0 + c1 * g), 1.0 / (1.0 + c2 * g)
+        se = ufl.sqrt(A * f1 ** 2 + B * f2 ** 2)
+        dse = -(c1 * A * f1 ** 3 + c2 * B * f2 ** 3) / se
+        w = 1.0 - 2.0 / 3.0 * H * g
+        g = g - (se * w - Y0) / (dse * w - 2.0 / 3.0 * H * se)
+    f1, f2 = 1.0 / (1.0 + c1 * g), 1.0 / (1.0 + c2 * g)
+    xx = 0.5 * (a * f1 + b * f2)
+    yy = 0.5 * (a * f1 - b * f2)
+    sig = ufl.as_tensor([[xx, t * f2, 0.0], [t * f2, yy, 0.0], [0.0, 0.0, 0.0]])
+    return ufl.conditional(ufl.gt(q, y_n), sig, sig_tr)
+
+
+def chen_update(sig_rot, sig_tr, p_n, elastic: Elastic, hardening: Hardening, model: str):
+    """One explicit increment of Chen's single-parameter law (as materials.chen_update)."""
+    G = elastic.mu
+    d = sig_tr - sig_rot
+    s0, ds = ufl.dev(sig_rot), ufl.dev(d)
+    y_n = sigma_y(hardening, p_n)
+    qa, qb = ufl.inner(ds, ds), 2.0 * ufl.inner(s0, ds)
+    qc = ufl.inner(s0, s0) - 2.0 / 3.0 * y_n ** 2
+    outside = ufl.ge(qc, 0.0)
+    crossing = ufl.And(ufl.Not(outside), ufl.gt(qa + qb + qc, 0.0))
+    disc = ufl.sqrt(ufl.max_value(qb ** 2 - 4.0 * qa * qc, _TINY))
+    root = ufl.conditional(ufl.ge(qb, 0.0), -2.0 * qc / (qb + disc),
+                           (disc - qb) / (2.0 * ufl.max_value(qa, _TINY)))
+    r = ufl.conditional(crossing, root, 0.0)
+    s_c = s0 + r * ds
+    a = ufl.inner(s_c, d)
+    h = slope(hardening, p_n)
+    beta = 1.0 - elastic.E * h / (elastic.E + h) / (3.0 * G)
+    g1 = 2.0 * G * (1.0 - beta) / beta
+    Cs = hooke(s_c, elastic, model)
+    den = g1 * ufl.inner(s_c, s_c) + ufl.inner(s_c, Cs)
+    kappa = (1.0 - r) * a / den
+    plastic = ufl.And(ufl.Or(outside, crossing), ufl.gt(a, 0.0))
+    return ufl.conditional(plastic, sig_tr - kappa * Cs, sig_tr)
+
+
+def plane_stress_thickness(sig, sig_tr, sig_rot, elastic: Elastic):
+    """Logarithmic thickness strain of a plane-stress increment (materials.plane_stress_thickness)."""
+    E, nu = elastic.E, elastic.nu
+    tr2 = lambda s: s[0, 0] + s[1, 1]         # noqa: E731
+    return -nu / E * tr2(sig - sig_rot) - (1.0 - nu) / E * tr2(sig_tr - sig)

@@ -1,0 +1,82 @@
+"""Collective decisions: a failure on one MPI rank becomes the same failure on every rank.
+
+A rank that raises while the others go on to the next collective call (an assembly, a reduction, a
+parallel file write) leaves them waiting for ever. Every piece of work that runs on some ranks only,
+or that can fail on some ranks only (the return map at the rank's quadrature points, a file written
+by rank 0, a user's callback), goes through :func:`collective` or :func:`on_root`: the outcome is
+gathered, and if any rank failed, every rank raises the first failing rank's exception (the same type
+and message; :class:`RankFailure` if it cannot be sent).
+"""
+from __future__ import annotations
+
+import pickle
+from typing import Any, Callable
+
+from mpi4py import MPI
+
+
+class RankFailure(RuntimeError):
+    """An error raised on another rank that could not be re-created here."""
+
+
+def _packed(err: BaseException | None):
+    if err is None:
+        return None
+    try:
+        blob = pickle.dumps(err)
+        pickle.loads(blob)
+    except Exception:
+        blob = None
+    return type(err).__name__, str(err), blob
+
+
+def agree(comm: MPI.Comm, err: BaseException | None) -> None:
+    """Raise on every rank if ``err`` is not None on any rank (the lowest failing rank's error)."""
+    if comm.size == 1:
+        if err is not None:
+            raise err
+        return
+    outcomes = comm.allgather(_packed(err))
+    failed = [(rank, o) for rank, o in enumerate(outcomes) if o is not None]
+    if not failed:
+        return
+    rank, (name, text, blob) = failed[0]
+    if err is not None and rank == comm.rank:
+        raise err
+    if blob is not None:
+        raise pickle.loads(blob)
+    raise RankFailure(f"rank {rank}: {name}: {text}")
+
+
+def first_failure(comm: MPI.Comm, err: BaseException | None) -> str | None:
+    """The message of the lowest failing rank's error (the same on every rank), or None."""
+    if comm.size == 1:
+        return None if err is None else f"{type(err).__name__}: {err}"
+    outcomes = comm.allgather(None if err is None else f"{type(err).__name__}: {err}")
+    failed = [(rank, o) for rank, o in enumerate(outcomes) if o is not None]
+    return None if not failed else (failed[0][1] if len(failed) == comm.size
+                                    else f"rank {failed[0][0]}: {failed[0][1]}")
+
+
+def collective(comm: MPI.Comm, fn: Callable[..., Any], *args, **kwargs) -> Any:
+    """Run ``fn`` on every rank; if it raises on any rank, raise on every rank."""
+    result, err = None, None
+    try:
+        result = fn(*args, **kwargs)
+    except Exception as e:          # noqa: BLE001 - handed to every rank
+        err = e
+    agree(comm, err)
+    return result
+
+
+def on_root(comm: MPI.Comm, fn: Callable[..., Any], *args, **kwargs) -> Any:
+    """Run ``fn`` on rank 0 only (a file operation); its result is broadcast, its failure raised on
+    every rank."""
+    result, err = None, None
+    if comm.rank == 0:
+        try:
+            result = fn(*args, **kwargs)
+        except Exception as e:      # noqa: BLE001
+            err = e
+    agree(comm, err)
+    return comm.bcast(result, root=0) if comm.size > 1 else result

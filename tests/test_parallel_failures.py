@@ -1,0 +1,114 @@
+"""A failure on one MPI rank is a failure on every rank, never a deadlock.
+
+Each case runs a small plastic block on two ranks in a process of its own (mpirun, with a time limit:
+a deadlock shows as a timeout) and injects a failure on one rank only: the return map raising at that
+rank's points, a callback (a file write) failing on rank 0, an error out of one rank's share of the
+linear solve. The ranks must agree: a failed constitutive update or linear solve is a failed Newton
+iteration, so every rank cuts the increment back and the run goes on to the same end; a failed
+callback stops every rank with the same error.
+"""
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+COMMON = """
+import logging, sys
+logging.disable(logging.INFO)
+from mpi4py import MPI
+from comove_dolfinx import geometry, materials
+from comove_dolfinx.materials import Elastic, Hardening
+from comove_dolfinx.model import Model, Plasticity
+from comove_dolfinx.solver import IncrementalSolver, StepSettings
+comm = MPI.COMM_WORLD
+md = geometry.rectangle(1.0, 0.5, 0.125, order=2, comm=comm, cache_dir=sys.argv[1])
+m = Model(md, "plane_strain", Elastic(1000.0, 0.3), plasticity=Plasticity(Hardening.linear(15.0, 100.0)))
+m.fix("left")
+m.fix("right", value=(0.05, 0.02))
+m.finalize()
+solver = IncrementalSolver(m, StepSettings(n_steps=3, max_cutbacks=2))
+def report(text):
+    lines = comm.gather(f"rank {comm.rank}: {text}")
+    if comm.rank == 0:
+        print(chr(10).join(lines), flush=True)
+"""
+
+RETURN_MAP = COMMON + """
+calls = [0]
+j2 = materials.j2_return
+def flaky(*args, **kw):
+    calls[0] += 1
+    if comm.rank == 1 and 4 <= calls[0] <= 9:      # longer than the step halvings of Newton
+        raise RuntimeError("injected return-map failure")
+    return j2(*args, **kw)
+materials.j2_return = flaky
+res = solver.run()
+report(f"completed={res.completed} increments={len(res.increments)} "
+       f"cutbacks={sum(i.cutbacks for i in res.increments)}")
+"""
+
+CALLBACK = COMMON + """
+def write(model, inc):
+    if comm.rank == 0 and inc.step == 2:
+        raise OSError("injected: disk full")
+try:
+    solver.run([write])
+    report("no error")
+except OSError as err:
+    report(f"OSError {err}")
+"""
+
+LINEAR_SOLVE = COMMON + """
+from petsc4py import PETSc
+class Flaky:
+    # the real (collective) solve on every rank, then an error out of rank 1's part, once
+    def __init__(self, ksp):
+        self.ksp, self.calls = ksp, 0
+    def solve(self, b, x):
+        self.ksp.solve(b, x)
+        self.calls += 1
+        if comm.rank == 1 and self.calls == 3:
+            raise PETSc.Error(76)
+    def __getattr__(self, name):
+        return getattr(self.ksp, name)
+solver.newton.ksp = Flaky(solver.newton.ksp)
+res = solver.run()
+report(f"completed={res.completed} increments={len(res.increments)} "
+       f"cutbacks={sum(i.cutbacks for i in res.increments)}")
+"""
+
+
+def _run_two_ranks(tmp_path, script):
+    path = tmp_path / "case.py"
+    path.write_text(textwrap.dedent(script))
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    try:
+        p = subprocess.run(["mpirun", "-n", "2", sys.executable, str(path), str(tmp_path)],
+                           capture_output=True, text=True, env=env, timeout=240)
+    except subprocess.TimeoutExpired as err:
+        pytest.fail(f"deadlock: the two ranks did not finish ({err.stdout!r})")
+    lines = sorted(line for line in p.stdout.splitlines() if line.startswith("rank "))
+    assert len(lines) == 2, p.stdout + p.stderr
+    return p, [line.split(": ", 1)[1] for line in lines]
+
+
+def test_return_map_failure_on_one_rank_cuts_back_on_both(tmp_path):
+    p, (r0, r1) = _run_two_ranks(tmp_path, RETURN_MAP)
+    assert p.returncode == 0, p.stderr
+    assert r0 == r1
+    assert "completed=True" in r0 and "cutbacks=0" not in r0
+
+
+def test_callback_failure_on_rank_0_stops_both_with_its_error(tmp_path):
+    _, (r0, r1) = _run_two_ranks(tmp_path, CALLBACK)
+    assert r0 == r1 == "OSError injected: disk full"
+
+
+def test_linear_solve_failure_on_one_rank_cuts_back_on_both(tmp_path):
+    p, (r0, r1) = _run_two_ranks(tmp_path, LINEAR_SOLVE)
+    assert p.returncode == 0, p.stderr
+    assert r0 == r1
+    assert "completed=True" in r0 and "cutbacks=1" in r0
