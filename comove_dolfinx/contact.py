@@ -275,8 +275,8 @@ class Contact:
         if self.mu > 0 and self.method == "penalty":
             vals = self._assemble_vec(self._e_form)
             m = self._lumped.array
-            mask = m > 1e-300
-            self.e_n.x.array[:len(vals)][mask] = vals[mask] / m[mask]
+            b = self._sdofs             # the boundary's nodes (elsewhere m is round-off)
+            self.e_n.x.array[b] = vals[b] / m[b]
             self.e_n.x.scatter_forward()
         self.t_n = self.t
         self._d_n.value = self.obstacle.displacement(self.t)
@@ -369,14 +369,13 @@ class Contact:
     def update_fields(self) -> None:
         """Contact pressure and tangential traction (per current area) as boundary fields."""
         m = self._lumped.array
-        mask = m > 1e-300
+        b = self._sdofs
         for form, f in ((self._p_form, self.pressure), (self._q_form, self.shear)):
             if form is None:
                 continue
             vals = self._assemble_vec(form)
-            n = len(vals)
             f.x.array[:] = 0.0
-            f.x.array[:n][mask] = vals[mask] / m[mask]
+            f.x.array[b] = vals[b] / m[b]
             f.x.scatter_forward()
 
     def boundary_values(self, f: fem.Function) -> tuple[np.ndarray, np.ndarray]:

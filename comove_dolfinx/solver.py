@@ -29,8 +29,11 @@ Unlike an extrapolation it knows where the path is heading at t_n, not where it 
 increment, before any factorisation, starts from the unloaded state.
 An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
 ``divergence`` over the increment's first fails the increment; the loop
-then restores the last converged state and halves the increment, up to ``max_cutbacks`` times in a
-row, then stops cleanly (every converged increment has already been handed to the callbacks).
+then restores the last converged state and halves the increment, down to the smallest increment
+dt_nom / 2^max_cutbacks; when an increment of that size fails, the run stops cleanly (every converged
+increment has already been handed to the callbacks). The floor is absolute, not a count of failures
+in a row: near a limit load, where increments converge only when small and fail again once grown,
+a count would creep towards the limit for ever.
 After ``grow_after`` easy increments (at most ``easy_its`` iterations) the increment doubles again,
 never beyond its nominal size, so the run comes back onto the nominal load levels.
 """
@@ -401,6 +404,7 @@ class IncrementalSolver:
         m, st = self.model, self.steps
         dt_nom = st.t_end / st.n_steps
         dt, t, step, cut, easy = dt_nom, 0.0, 0, 0, 0
+        dt_min = dt_nom / 2.0 ** st.max_cutbacks
         past = [(0.0, m.u.x.array.copy())]          # converged (load, u), newest last
         tangent = st.predictor == "tangent"
         if isinstance(st.predictor, str) and not tangent:
@@ -431,10 +435,11 @@ class IncrementalSolver:
                 cut += 1
                 failed_its += its
                 log.info("  increment to t = %.6g failed (%s)", t_try, reason)
-                if cut > st.max_cutbacks:
+                if dt <= dt_min * (1.0 + 1e-9):
                     m.set_load(t)
-                    result.message = (f"stopped at load factor {t:.6g} after {cut - 1} cut-backs: "
-                                      f"{reason}")
+                    result.message = (f"stopped at load factor {t:.6g}: an increment of the "
+                                      f"smallest size ({dt:.3g}, after {cut - 1} cut-backs in a row)"
+                                      f" failed: {reason}")
                     return result
                 dt *= 0.5
                 easy = 0

@@ -50,6 +50,28 @@ def test_hertz_line_contact(hertz_mesh, method, theta):
     assert p_max == pytest.approx(2 * P / (np.pi * a), rel=0.05)
 
 
+@pytest.mark.mpi
+@pytest.mark.parametrize("method, theta", [("penalty", 0), ("nitsche", -1)])
+def test_hertz_against_a_rigid_cylinder(hertz_mesh, method, theta):
+    """The half-cylinder R1 = 1 pressed onto a rigid cylinder R2 = 4 (a Circle obstacle, the two
+    convex): Hertz with the effective radius R* = R1 R2 / (R1 + R2) = 0.8, half-width
+    a = sqrt(4 P R* / (pi E*)) and peak pressure p0 = 2 P / (pi a) (theory.md 7.3)."""
+    m = Model(hertz_mesh, "plane_strain", Elastic(E, NU))
+    m.fix("xsym", component=0)
+    m.fix("top", component=1, value=-0.0095)
+    c = Contact("contact", Circle((0.0, -4.0), 4.0), method=method, theta=theta,
+                gamma0=100.0 if method == "penalty" else 10.0)
+    m.boundary_terms.append(c)
+    _solve(m, 2)
+    P = 2.0 * c.force()[1]                 # the halves' horizontal forces cancel in the whole
+    Es = E / (1 - NU ** 2)
+    a = np.sqrt(4 * P * 0.8 / (np.pi * Es))
+    assert 0.05 < a < 0.15
+    assert c.zone().extent == pytest.approx(a, rel=0.04)
+    c.update_fields()
+    assert c.boundary_values(c.pressure)[1].max() == pytest.approx(2 * P / (np.pi * a), rel=0.05)
+
+
 @pytest.fixture(scope="module")
 def block(tmp_path_factory):
     cache = tmp_path_factory.mktemp("meshes")

@@ -104,3 +104,47 @@ def test_xdmf_keeps_every_p2_node(tmp_path, n):
         assert data["fields"][name] == len(hist), name
     tip = np.argmin(np.linalg.norm(X[:, :2] - [10.0, 0.125], axis=1))
     assert u[tip][:2] == pytest.approx([hist[-1]["tip_ux"], hist[-1]["tip_uy"]], rel=1e-9)
+
+
+_READ_CONTACT = """
+import sys, json, h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    X = f["Mesh/mesh/geometry"][...]
+    steps = sorted(f["Function/contact_pressure"].keys(), key=lambda t: float(t.replace("_", ".")))
+    p = f["Function/contact_pressure"][steps[-1]][...].ravel()
+print(json.dumps({"X": X.tolist(), "p": p.tolist(), "steps": len(steps)}))
+"""
+
+
+def test_xdmf_contact_pressure_is_the_contact_law(tmp_path):
+    """A block pressed by a follower pressure q onto a frictionless plane carries q at every point of
+    its bottom face: read back from the XDMF file in a process of its own, the contact pressure is q
+    at every node of the bottom (to 1e-8) and 0 at every other node."""
+    import json
+    import subprocess
+    import sys
+    from comove_dolfinx.contact import Contact, Plane
+    from comove_dolfinx.output import XDMFOutput
+    q = 20.0
+    md = geometry.rectangle(2.0, 1.0, 0.25, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
+    m = Model(md, "plane_stress", Elastic(1000.0, 0.3))
+    m.fix("left", component=0)
+    m.follower_pressure("top", q)
+    c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
+    m.boundary_terms.append(c)
+    m.finalize()
+    xdmf = XDMFOutput(tmp_path / "results.xdmf", m,
+                      [("contact_pressure", lambda: (c.update_fields(), c.pressure)[1])])
+    res = IncrementalSolver(m, StepSettings(n_steps=2)).run([lambda model, inc: xdmf.write(inc.load)])
+    xdmf.close()
+    assert res.completed
+    r = subprocess.run([sys.executable, "-c", _READ_CONTACT, str(tmp_path / "results.h5")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    data = json.loads(r.stdout)
+    X, p = np.array(data["X"]), np.array(data["p"])
+    assert data["steps"] == 2
+    bottom = np.abs(X[:, 1]) < 1e-12
+    assert bottom.sum() == 17                               # 8 P2 edges: 9 vertices + 8 mid-nodes
+    np.testing.assert_allclose(p[bottom], q, rtol=1e-8)
+    assert np.abs(p[~bottom]).max() < 1e-12 * q             # zero up to the writer's round-off

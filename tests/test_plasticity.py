@@ -16,13 +16,14 @@ def _rot(a):
     return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
 
 
+@pytest.mark.parametrize("update", ["sr", "hughes_winget"])
 @pytest.mark.parametrize("law", ["j2", "chen"])
-def test_rigid_rotation_keeps_plastic_state(tmp_path, law):
+def test_rigid_rotation_keeps_plastic_state(tmp_path, law, update):
     """A block stretched 2 % in plane strain (yield strain 0.1 %), then turned by 90 degrees in three
     rigid increments: the stress turns with it exactly and the plastic strain does not grow."""
     md = geometry.rectangle(1.0, 1.0, 0.5, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
     hard = Hardening((0.0, 0.05), (1.0, 1.5))
-    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), plasticity=Plasticity(hard, law))
+    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), update=update, plasticity=Plasticity(hard, law))
     m.finalize()
     F = np.diag([1.02, 0.99])
     states = []
@@ -44,14 +45,16 @@ def test_rigid_rotation_keeps_plastic_state(tmp_path, law):
 
 
 @pytest.mark.mpi
-def test_thick_cylinder_limit_pressure(mpi_tmp):
+@pytest.mark.parametrize("update", ["sr", "hughes_winget"])
+def test_thick_cylinder_limit_pressure(mpi_tmp, update):
     """Elastic-perfectly plastic tube a = 1, b = 2 under internal pressure, plane strain: the largest
     pressure it carries is (2/sqrt(3)) sigma_0 ln(b/a) (Hill, The Mathematical Theory of Plasticity,
     1950, ch. V). E/sigma_0 = 1000 keeps the geometry change at collapse to a few 1e-3."""
     a, b, s0 = 1.0, 2.0, 1.0
     p_lim = 2.0 / math.sqrt(3.0) * s0 * math.log(b / a)
     md = geometry.annulus_sector(a, b, 0.25, order=2, comm=MPI.COMM_WORLD, cache_dir=str(mpi_tmp))
-    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), plasticity=Plasticity(Hardening.perfect(s0)))
+    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), update=update,
+              plasticity=Plasticity(Hardening.perfect(s0)))
     m.fix("xsym", component=0)
     m.fix("ysym", component=1)
     m.follower_pressure("inner", 1.05 * p_lim)
