@@ -8,20 +8,18 @@ Units are whatever the user supplies consistently; the scenes use cm and kgf.
 
 __version__ = "0.1.0"
 
-REQUIRED_DOLFINX = "0.5"
-
 
 def check_platform() -> None:
-    """Fail with a clear message unless Debian's dolfinx 0.5 stack and gmsh are importable."""
+    """Fail with a clear message unless a supported dolfinx (0.5, 0.9, 0.11) and gmsh are importable."""
     try:
-        import dolfinx
+        import dolfinx  # noqa: F401
         import gmsh  # noqa: F401
     except ModuleNotFoundError as err:
         raise SystemExit(
-            f"comove_dolfinx needs Debian's python3-dolfinx-real and python3-gmsh ({err}). "
-            "They serve /usr/bin/python3 only: run 'make demo' or create the venv with "
-            "'/usr/bin/python3 -m venv --system-site-packages .venv'. A PETSC_DIR in the "
-            "environment that points elsewhere also hides dolfinx: unset it.") from None
-    if not dolfinx.__version__.startswith(REQUIRED_DOLFINX):
-        raise SystemExit(f"comove_dolfinx is written for dolfinx {REQUIRED_DOLFINX}.x, found "
-                         f"{dolfinx.__version__}; install Debian 12's python3-dolfinx-real.")
+            f"comove_dolfinx needs dolfinx and gmsh ({err}). On Debian they serve /usr/bin/python3 "
+            "only: run 'make demo', or create the venv with '/usr/bin/python3 -m venv "
+            "--system-site-packages .venv'; elsewhere 'make demo DOLFINX=pip' installs the PyPI "
+            "wheels. A PETSC_DIR in the environment that points elsewhere also hides Debian's "
+            "dolfinx: unset it.") from None
+    from .compat import check_version
+    check_version()

@@ -104,6 +104,7 @@ def _run(name: str, sets: list[str], out: pathlib.Path, tag: str,
     """Run scene ``name`` with overrides (and Newton settings instead of the scene's) into
     out/runs/<tag>; (run.json, history rows)."""
     import json
+
     from .job import run_scene
     scene = get_scene(name, sets)
     folder = out / "runs" / tag
@@ -280,6 +281,7 @@ def ring_tolerance(out: pathlib.Path, steps=RING_TOLERANCE_STEPS, rtols=RING_TOL
     the deviation). The increments' own error is read off ``ring_steps``; a test is loose enough
     when its deviation stays well below it."""
     import dataclasses
+
     from .scenes import Ring
     base = Ring().newton_settings()
     rows = []

@@ -36,10 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import ufl
-from dolfinx import cpp, fem
-from dolfinx.fem import petsc as fem_petsc
+from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
+
+from . import compat
 
 METHODS = ("penalty", "nitsche")
 FACET_DEGREE = 7
@@ -201,11 +202,11 @@ class Contact:
         self._d_lag = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))   # obstacle in the lag state
         self._d_n.value = self._d_lag.value = self.obstacle.displacement(self.t_n)
         tdim = msh.topology.dim
-        DG0 = fem.FunctionSpace(msh, ("DG", 0))
+        DG0 = compat.function_space(msh, "DG", 0)
         self.h = fem.Function(DG0, name="cell_size")
         ncell = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
         cells = np.arange(ncell, dtype=np.int32)
-        self.h.x.array[DG0.dofmap.list.array.reshape(-1)[:ncell]] = cpp.mesh.h(msh._mesh, tdim, cells)
+        self.h.x.array[compat.cell_dofs(DG0, ncell)[:, 0]] = compat.cell_sizes(msh, cells)
         self.u_lag = fem.Function(model.V, name="u_lag")
         # a Constant, so that scenes differing only in gamma0 share the compiled forms
         gamma0E = fem.Constant(msh, PETSc.ScalarType(self.gamma0 * model.elastic.E))
@@ -247,7 +248,8 @@ class Contact:
             s = self.mu * p_lag
             slip = ufl.dot(t_o, (u - u_n) - (self.obstacle._d - self._d_n))
             if self.method == "penalty":
-                self.e_n = fem.Function(fem.FunctionSpace(msh, ("CG", model.degree)), name="stick_slip")
+                self.e_n = fem.Function(compat.function_space(msh, "Lagrange", model.degree),
+                                        name="stick_slip")
                 trial = gamma * (self.e_n + slip)
                 q_tr = _clip(trial, s)
                 self.q_ref = -q_tr
@@ -274,7 +276,7 @@ class Contact:
         """Called before the model's own state moves to the new increment (u_n still the old one)."""
         if self.mu > 0 and self.method == "penalty":
             vals = self._assemble_vec(self._e_form)
-            m = self._lumped.array
+            m = self._lumped
             b = self._sdofs             # the boundary's nodes (elsewhere m is round-off)
             self.e_n.x.array[b] = vals[b] / m[b]
             self.e_n.x.scatter_forward()
@@ -305,7 +307,7 @@ class Contact:
         e = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))
         self._e = e
         self._force_form = fem.form(-ufl.replace(self.R_c, {model.v: e}))
-        S = fem.FunctionSpace(msh, ("CG", model.degree))
+        S = compat.function_space(msh, "Lagrange", model.degree)
         phi = ufl.TestFunction(S)
         F = model.update.F(model.u)
         N = ufl.FacetNormal(msh)
@@ -330,9 +332,8 @@ class Contact:
             self._e_form = fem.form(self._e_new * phi * self.ds_c)
         self.pressure = fem.Function(S, name="contact_pressure")
         self.shear = fem.Function(S, name="contact_shear")
-        m = fem_petsc.assemble_vector(self._mass)
-        m.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        self._lumped = m
+        self._vec = compat.create_vector(self._mass)
+        self._lumped = self._assemble_vec(self._mass)
         # nodes of the contact boundary (owned), for the contact zone
         fdim = msh.topology.dim - 1
         ft = model.meshdata.facet_tags
@@ -345,9 +346,9 @@ class Contact:
         self._sdofs = sdofs[sdofs < S.dofmap.index_map.size_local]
 
     def _assemble_vec(self, form) -> np.ndarray:
-        b = fem_petsc.assemble_vector(form)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return b.array.copy()
+        """Owned entries of an assembled linear form on the boundary field space."""
+        compat.assemble_vector(self._vec, form)
+        return self._vec.array.copy()
 
     def check_start(self) -> None:
         """ContactError if the body already penetrates the obstacle in its initial state."""
@@ -368,7 +369,7 @@ class Contact:
 
     def update_fields(self) -> None:
         """Contact pressure and tangential traction (per current area) as boundary fields."""
-        m = self._lumped.array
+        m = self._lumped
         b = self._sdofs
         for form, f in ((self._p_form, self.pressure), (self._q_form, self.shear)):
             if form is None:

@@ -29,9 +29,9 @@ from typing import Callable, Iterable
 import dolfinx
 import gmsh
 import numpy as np
-import ufl
-from dolfinx.io import gmshio
 from mpi4py import MPI
+
+from . import compat
 
 __all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "fix_coordinate_element", "load_msh",
            "plate_section", "quarter_disc", "rectangle"]
@@ -82,19 +82,10 @@ class MeshData:
 
 
 def fix_coordinate_element(mesh: dolfinx.mesh.Mesh) -> None:
-    """Give the mesh's UFL coordinate element the variant "equispaced" if it has none (in place).
-
-    ffcx 0.5.0 makes exactly this change at the first compilation of a form on the mesh, which changes
-    the cache keys of every form compiled afterwards in the same process, so a rerun recompiles them.
-    Doing it right after the mesh is created keeps the keys stable. Meshes made by gmshio already carry
-    the variant (no-op); those of ``dolfinx.mesh.create_rectangle`` and friends do not.
-    """
-    domain = mesh.ufl_domain()
-    element = domain.ufl_coordinate_element()
-    if element._sub_element._variant is None:
-        scalar = ufl.FiniteElement(element.family(), element.cell(), element.degree(),
-                                   element.quadrature_scheme(), variant="equispaced")
-        domain._ufl_coordinate_element = ufl.VectorElement(scalar)
+    """Make the mesh's form cache keys stable from its first compilation on (see
+    :func:`compat.fix_coordinate_element`; dolfinx 0.5 only, a no-op later). Meshes read from Gmsh
+    already carry the variant; those of ``dolfinx.mesh.create_rectangle`` and friends do not."""
+    compat.fix_coordinate_element(mesh)
 
 
 def _positive(**values: float) -> None:
@@ -238,7 +229,7 @@ def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
     # dolfinx 0.5.2's gmshio.read_from_msh is broken (NameError: 'msh' on the reading rank,
     # 'partitioner' elsewhere), so do what it should: merge on rank 0, then model_to_mesh everywhere.
     try:
-        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+        mesh, cell_tags, facet_tags = compat.model_to_mesh(gmsh.model, comm, 0, gdim=2)
     finally:
         if comm.rank == 0:
             gmsh.finalize()

@@ -25,8 +25,21 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .material_data import (MODELS, ONE, PDEV, WEIGHT, Elastic, Hardening, MaterialError, as_points,
-                            check_model, check_plane_stress, ddot, deviator, von_mises)
+from .material_data import (
+    MODELS,
+    ONE,
+    PDEV,
+    WEIGHT,
+    Elastic,
+    Hardening,
+    MaterialError,
+    as_points,
+    check_model,
+    check_plane_stress,
+    ddot,
+    deviator,
+    von_mises,
+)
 
 __all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_update", "deviator", "j2_return",
            "plane_stress_thickness",

@@ -25,16 +25,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import ufl
-from ufl.algorithms import expand_derivatives
 from dolfinx import fem
-from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
+from ufl.algorithms import expand_derivatives
 
+from . import compat
 from . import materials as mat
 from . import materials_ufl as mat_ufl
-from .parallel import agree
 from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
+from .parallel import agree
 from .quadrature import CellInterpolator, QuadratureRule
 from .updates import make_update
 
@@ -88,7 +88,7 @@ class _Dirichlet:
     name: str
     component: int | None
     ramp: _Ramp | None
-    bc: fem.DirichletBCMetaClass = field(repr=False)
+    bc: object = field(repr=False)
 
 
 class Model:
@@ -136,7 +136,7 @@ class Model:
         if plasticity is not None and not self.update.rotates:
             raise ValueError(f"update {update!r} cannot carry plasticity: use sr or hughes_winget")
 
-        self.V = fem.VectorFunctionSpace(msh, ("CG", degree))
+        self.V = compat.function_space(msh, "Lagrange", degree, (2,))
         self.u = fem.Function(self.V, name="displacement")
         self.u_n = fem.Function(self.V, name="displacement_n")
         self.du = fem.Function(self.V, name="newton_correction")
@@ -215,8 +215,8 @@ class Model:
         """Reference positions (n, 2) and forces (n, 2) that the supports exert on the nodes of a
         tagged boundary (this rank's owned nodes), taken from the residual at the current state:
         at a constrained dof R = f_int - f_ext is the force the support must supply."""
-        b = fem_petsc.assemble_vector(self.residual_form)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b = compat.create_vector(self.residual_form)
+        compat.assemble_vector(b, self.residual_form)
         fdim = self.mesh.topology.dim - 1
         dofs = fem.locate_dofs_topological(self.V.sub(0), fdim, self._facets(name))
         bs = self.V.dofmap.index_map_bs
@@ -266,7 +266,7 @@ class Model:
             return self.F22_q
         return up.F22
 
-    def finalize(self, jit_params: dict | None = None) -> None:
+    def finalize(self, jit_options: dict | None = None) -> None:
         """Build and compile the residual, the Jacobian and the stress evaluation (once)."""
         u, v, dx = self.u, self.v, self.rule.dx
         up = self.update.build(u, self.u_n, self.sigma_n)
@@ -278,7 +278,7 @@ class Model:
         w = self.kin.weight()
         P = J * to_tensor(self.sigma) * ufl.inv(F).T
         R = ufl.inner(P, self.kin.grad3(v)) * w * dx
-        self._internal, self._internal_form = (R, jit_params or {}), None
+        self._internal, self._internal_form = (R, jit_options), None
         for ext in self._external:
             R = R - ext
         for term in self.boundary_terms:
@@ -301,9 +301,8 @@ class Model:
             dF22 = expand_derivatives(self.F22_q * (ufl.dot(self.G_tr, dsig_tr)
                                                     + ufl.dot(self.G_rot, dsig_rot)))
             Jac = Jac + ufl.derivative(ufl.inner(P, self.kin.grad3(v)) * w * dx, self.F22_q, dF22)
-        params = {"jit_params": jit_params or {}}
-        self.residual_form = fem.form(R, **params)
-        self.jacobian_form = fem.form(Jac, **params)
+        self.residual_form = compat.form(R, jit_options)
+        self.jacobian_form = compat.form(Jac, jit_options)
         # Everything the constitutive stage needs, in one evaluation per iteration
         parts = [to_vec(up.sigma)]
         if self.plasticity is not None:
@@ -313,7 +312,7 @@ class Model:
         self._n_parts = len(parts)
         Fu = self.update.F(u)
         parts.append(ufl.as_vector([ufl.det(Fu)]))
-        self._eval = fem.Expression(ufl.as_vector([c for p in parts for c in p]), self.rule.points)
+        self._eval = self.rule.expression(ufl.as_vector([c for p in parts for c in p]))
         self._state_new = None if up.state_new is None else np.zeros((self.rule.size, 4))
         self._compiled = True
         self.set_load(0.0)
@@ -324,7 +323,7 @@ class Model:
         compiled on first use: its norm is the force scale of the "force" convergence test."""
         if self._internal_form is None:
             R, jit = self._internal
-            self._internal_form = fem.form(R, jit_params=jit)
+            self._internal_form = compat.form(R, jit)
         return self._internal_form
 
     def nominal_traction(self, N, u=None):
@@ -360,12 +359,9 @@ class Model:
         """DG function holding a cell-wise fit of the converged quadrature state ``name`` (created
         on first use, refreshed at each commit): "sigma_n" (4-vector), "p_n", "F22_n" (scalars)."""
         if name not in self._facet:
-            scalar = name in ("p_n", "F22_n")
-            k = max(self.degree - 1, 0)
-            cell = self.mesh.ufl_cell()
-            el = (ufl.FiniteElement("DG", cell, k) if scalar else
-                  ufl.VectorElement("DG", cell, k, dim=4))
-            f = fem.Function(fem.FunctionSpace(self.mesh, el), name=name + "_dg")
+            shape = () if name in ("p_n", "F22_n") else (4,)
+            V = compat.function_space(self.mesh, "DG", max(self.degree - 1, 0), shape)
+            f = fem.Function(V, name=name + "_dg")
             if name == "F22_n":
                 f.x.array[:] = 1.0
             self._facet[name] = (f, CellInterpolator(self.rule, f.function_space))

@@ -19,6 +19,7 @@ import ufl
 from dolfinx import fem, io
 from mpi4py import MPI
 
+from . import compat
 from .kinematics import fibre_stress, to_tensor
 from .parallel import on_root
 
@@ -26,7 +27,7 @@ from .parallel import on_root
 class Probe:
     """Value of a vector Lagrange function at a node of its space (e.g. the beam tip)."""
 
-    def __init__(self, V: fem.FunctionSpace, point, tol: float = 1e-8):
+    def __init__(self, V, point, tol: float = 1e-8):
         X = V.tabulate_dof_coordinates()
         n_owned = V.dofmap.index_map.size_local
         d = np.linalg.norm(X[:n_owned, :len(point)] - np.asarray(point, dtype=float), axis=1)
@@ -98,9 +99,9 @@ class FibreStress:
         A3 = ufl.as_vector([A[0], A[1], 0.0])
         self.rule = rule
         self.expr = rule.expression(fibre_stress(to_tensor(model.sigma), model.F, A3))
-        DG0 = fem.FunctionSpace(model.mesh, ("DG", 0))
+        DG0 = compat.function_space(model.mesh, "DG", 0)
         self.function = fem.Function(DG0, name=name)
-        self.cell_dofs = DG0.dofmap.list.array.reshape(-1)[:len(rule.cells)]
+        self.cell_dofs = compat.cell_dofs(DG0, len(rule.cells))[:, 0]
 
     def values(self) -> np.ndarray:
         """Cell averages over the local and ghost cells at the current iterate."""
@@ -117,7 +118,7 @@ class XDMFOutput:
 
     def __init__(self, path: pathlib.Path, model, extra=(), fibres=()):
         msh = model.mesh
-        gdeg = msh.geometry.cmap.degree
+        gdeg = compat.geometry_degree(msh)
         if model.degree != gdeg:
             raise ValueError(
                 f"displacement degree {model.degree} on a mesh of geometry order {gdeg}: XDMF would "
@@ -125,16 +126,16 @@ class XDMFOutput:
         self.model = model
         self.file = io.XDMFFile(msh.comm, str(path), "w")
         self.file.write_mesh(msh)
-        DG0 = fem.FunctionSpace(msh, ("DG", 0))
-        T0 = fem.TensorFunctionSpace(msh, ("DG", 0), shape=(3, 3))
+        DG0 = compat.function_space(msh, "DG", 0)
+        T0 = compat.function_space(msh, "DG", 0, (3, 3))
         self.stress = fem.Function(T0, name="cauchy_stress")
         self.mises = fem.Function(DG0, name="von_mises")
         self.plastic = fem.Function(DG0, name="plastic_strain") if model.plasticity else None
         self.extra = list(extra)
         self.fibres = [FibreStress(model, name, A) for name, A in fibres]
         # DG0 dof of each local and ghost cell (the numbering need not follow the cells)
-        self.cell_dofs = DG0.dofmap.list.array.reshape(-1)[:len(model.rule.cells)]
-        self.cell_dofs_T = T0.dofmap.list.array.reshape(-1)[:len(model.rule.cells)]
+        self.cell_dofs = compat.cell_dofs(DG0, len(model.rule.cells))[:, 0]
+        self.cell_dofs_T = compat.cell_dofs(T0, len(model.rule.cells))[:, 0]
 
     def write(self, t: float) -> None:
         m, rule = self.model, self.model.rule

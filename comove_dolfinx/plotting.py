@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from dolfinx import fem
-from mpi4py import MPI
 
+from . import compat
 from .materials import von_mises
 
 
@@ -53,7 +53,7 @@ class Snapshots:
     def take(self, model, load: float) -> Snapshot | None:
         msh = model.mesh
         if self._V1 is None:
-            self._V1 = fem.VectorFunctionSpace(msh, ("CG", 1))
+            self._V1 = compat.function_space(msh, "Lagrange", 1, (2,))
             self._u1 = fem.Function(self._V1)
         V1, u1 = self._V1, self._u1
         u1.interpolate(model.u)
@@ -63,7 +63,7 @@ class Snapshots:
         xy = X + u1.x.array.reshape(-1, 2)[:n_own]
         gidx = imap.local_to_global(np.arange(n_own, dtype=np.int32))
         n_cells = msh.topology.index_map(msh.topology.dim).size_local
-        local = V1.dofmap.list.array.reshape(-1, 3)[:n_cells]
+        local = compat.cell_dofs(V1, n_cells)
         tri = imap.local_to_global(local.ravel()).reshape(-1, 3)
         rule = model.rule
         if self.field == "plastic_strain" and model.p is not None:

@@ -12,6 +12,8 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
+from . import compat
+
 _CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral}
 
 
@@ -29,26 +31,17 @@ class QuadratureRule:
         self.npts = len(self.weights)
         self.dx = ufl.dx(domain=mesh, metadata={"quadrature_degree": degree,
                                                 "quadrature_scheme": "default"})
-        self._spaces: dict[tuple, fem.FunctionSpace] = {}
+        self._spaces: dict[tuple, object] = {}
 
     @property
     def size(self) -> int:
         """Number of quadrature points on this rank, ghost cells included."""
         return len(self.cells) * self.npts
 
-    def space(self, shape: tuple = ()) -> fem.FunctionSpace:
+    def space(self, shape: tuple = ()):
         """Quadrature space of scalars (), vectors (n,) or tensors (n, m) (cached)."""
         if shape not in self._spaces:
-            cell = self.mesh.ufl_cell()
-            if shape == ():
-                el = ufl.FiniteElement("Quadrature", cell, self.degree, quad_scheme="default")
-            elif len(shape) == 1:
-                el = ufl.VectorElement("Quadrature", cell, self.degree, dim=shape[0],
-                                       quad_scheme="default")
-            else:
-                el = ufl.TensorElement("Quadrature", cell, self.degree, shape=shape,
-                                       quad_scheme="default")
-            self._spaces[shape] = fem.FunctionSpace(self.mesh, el)
+            self._spaces[shape] = compat.quadrature_space(self.mesh, self.degree, shape)
         return self._spaces[shape]
 
     def function(self, shape: tuple = (), name: str = "q", value=None) -> fem.Function:
@@ -63,14 +56,13 @@ class QuadratureRule:
         shape = f.ufl_shape
         return f.x.array.reshape((self.size,) + tuple(shape))
 
-    def expression(self, expr) -> fem.Expression:
+    def expression(self, expr):
         """Compile a UFL expression for evaluation at the quadrature points (once per model)."""
-        return fem.Expression(expr, self.points)
+        return compat.expression(expr, self.points)
 
-    def evaluate(self, expression: fem.Expression) -> np.ndarray:
+    def evaluate(self, expression) -> np.ndarray:
         """Values at every point of every local and ghost cell, shape (points, value_size)."""
-        vals = expression.eval(self.cells)
-        return vals.reshape(self.size, -1)
+        return compat.evaluate(expression, self.mesh, self.cells).reshape(self.size, -1)
 
     def cell_average(self, values: np.ndarray) -> np.ndarray:
         """Quadrature-weighted cell averages of per-point values (points, ...) -> (cells, ...)."""
@@ -85,18 +77,12 @@ class CellInterpolator:
     there): with DG1 and the 3-point rule of degree 2 the fit interpolates the point values exactly.
     """
 
-    def __init__(self, rule: QuadratureRule, V_dg: fem.FunctionSpace):
-        el = V_dg.ufl_element()
-        sub = el.sub_elements()[0] if el.num_sub_elements() else el
-        k = sub.degree()
-        cell = _CELLS[rule.mesh.ufl_cell().cellname()]
-        basis = basix.create_element(basix.ElementFamily.P, cell, k, basix.LagrangeVariant.equispaced,
-                                     True)
-        B = basis.tabulate(0, rule.points)[0, :, :, 0]               # (points, dofs)
+    def __init__(self, rule: QuadratureRule, V_dg):
+        k = compat.element_degree(V_dg)
+        B = compat.lagrange_tabulate(rule.mesh.ufl_cell().cellname(), k, rule.points)  # (points, dofs)
         BW = B.T * rule.weights
         self.proj = np.linalg.solve(BW @ B, BW)                      # (dofs, points)
-        ncell = len(rule.cells)
-        self.dofs = V_dg.dofmap.list.array.reshape(-1, B.shape[1])[:ncell]
+        self.dofs = compat.cell_dofs(V_dg, len(rule.cells))
         self.rule = rule
 
     def __call__(self, values: np.ndarray, f: fem.Function) -> None:

@@ -47,10 +47,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from dolfinx import fem
-from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from . import compat
 from .model import InvertedElement, Model, ReturnMapFailure
 from .parallel import collective, first_failure
 
@@ -103,8 +103,8 @@ class Newton:
         self.model = model
         self.settings = settings or NewtonSettings()
         self.timer = timer or Timer()
-        self.A = fem_petsc.create_matrix(model.jacobian_form)
-        self.b = fem_petsc.create_vector(model.residual_form)
+        self.A = compat.create_matrix(model.jacobian_form)
+        self.b = compat.create_vector(model.residual_form)
         self.ksp = PETSc.KSP().create(model.comm)
         self.ksp.setOperators(self.A)
         self.ksp.setType("preonly")
@@ -131,12 +131,7 @@ class Newton:
         with self.timer("stress update"):
             m.evaluate_stress()
         with self.timer("assembly"):
-            with b.localForm() as bl:
-                bl.set(0.0)
-            fem_petsc.assemble_vector(b, m.residual_form)
-            fem_petsc.apply_lifting(b, [m.jacobian_form], bcs=[m.bcs], x0=[m.u.vector], scale=-1.0)
-            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            fem_petsc.set_bc(b, m.bcs, m.u.vector, -1.0)
+            compat.assemble_vector(b, m.residual_form, m.jacobian_form, m.bcs, compat.petsc_vec(m.u))
             b.scale(-1.0)
         return b.norm()
 
@@ -145,7 +140,7 @@ class Newton:
         raised on one rank's part of the solve becomes every rank's failure)."""
         err = None
         try:
-            self.ksp.solve(self.b, self.model.du.vector)
+            self.ksp.solve(self.b, compat.petsc_vec(self.model.du))
         except PETSc.Error as e:
             err = e
         failure = first_failure(self.model.comm, err)
@@ -163,10 +158,7 @@ class Newton:
         """||F_int|| at the current iterate (stress of the last residual evaluation): the forces
         the body carries, reactions and contact forces included."""
         f = self._f
-        with f.localForm() as fl:
-            fl.set(0.0)
-        fem_petsc.assemble_vector(f, self.model.internal_force_form)
-        f.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        compat.assemble_vector(f, self.model.internal_force_form)
         return f.norm()
 
     def _converged(self, rnorm: float) -> bool:
@@ -220,7 +212,7 @@ class Newton:
         Returns (||R||, alpha, error or None)."""
         m, st = self.model, self.settings
         u0 = m.u.x.array.copy()
-        s0 = -self._b_old.dot(m.du.vector)           # b = -R
+        s0 = -self._b_old.dot(compat.petsc_vec(m.du))           # b = -R
         lo, hi = (0.0, s0), None
         alpha, err, best = 1.0, None, None
         for _ in range(st.backtracks + 1):
@@ -229,7 +221,7 @@ class Newton:
                 err, hi = e, None
                 alpha = 0.5 * (lo[0] + alpha)
                 continue
-            s1 = -self.b.dot(m.du.vector)
+            s1 = -self.b.dot(compat.petsc_vec(m.du))
             if best is None or abs(s1) < best[0]:
                 best = (abs(s1), alpha)
             if abs(s1) <= st.energy_eta * abs(s0) or (s1 * s0 > 0 and hi is None):
@@ -257,15 +249,13 @@ class Newton:
             if self._converged(rnorm):
                 return True, it - 1, "converged"
             with self.timer("assembly"):
-                self.A.zeroEntries()
-                fem_petsc.assemble_matrix(self.A, m.jacobian_form, bcs=m.bcs)
-                self.A.assemble()
+                compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
             with self.timer("solve"):
                 failure = self._solve_linear()
             if failure is not None:
                 return False, it, failure
             self.factorised = True
-            dnorm = m.du.vector.norm()
+            dnorm = compat.petsc_vec(m.du).norm()
             if not np.isfinite(dnorm):
                 return False, it, "the Newton correction is not finite (singular tangent?)"
             if self.line_search == "energy":
@@ -282,7 +272,7 @@ class Newton:
                      rnorm / max(self.residual_scale, 1e-300), dnorm)
             if not np.isfinite(rnorm) or rnorm > s.divergence * max(r0, s.atol):
                 return False, it, f"diverged (|R| = {rnorm:.3e})"
-            if alpha == 1.0 and dnorm <= s.stol * m.u.vector.norm():
+            if alpha == 1.0 and dnorm <= s.stol * compat.petsc_vec(m.u).norm():
                 return True, it, "converged"
         converged = self._converged(rnorm)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
@@ -306,7 +296,7 @@ class Newton:
                 rhs.scale(1.0 / eps)
                 err = None
                 try:
-                    self.ksp.solve(rhs, rate.vector)
+                    self.ksp.solve(rhs, compat.petsc_vec(rate))
                 except PETSc.Error as e:
                     err = e
                 if first_failure(m.comm, err) is not None or self.ksp.getConvergedReason() < 0:

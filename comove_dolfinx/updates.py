@@ -29,8 +29,16 @@ from dataclasses import dataclass
 
 import ufl
 
-from .kinematics import (PLANE_STRESS, Kinematics, embed, increment_gradient,
-                         polar_rotation_2d, sr_decomposition, to_tensor, to_vec)
+from .kinematics import (
+    PLANE_STRESS,
+    Kinematics,
+    embed,
+    increment_gradient,
+    polar_rotation_2d,
+    sr_decomposition,
+    to_tensor,
+    to_vec,
+)
 from .materials import Elastic
 
 

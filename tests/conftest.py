@@ -38,6 +38,6 @@ def unit_mesh():
 
 def evaluate(expr, msh, point=(1 / 3, 1 / 3)):
     """Value of a UFL expression at a reference point of cell 0 (shape of the expression)."""
-    from dolfinx import fem
-    e = fem.Expression(expr, np.array([point], dtype=float))
-    return e.eval(np.array([0], dtype=np.int32)).reshape(expr.ufl_shape)
+    from comove_dolfinx import compat
+    e = compat.expression(expr, np.array([point], dtype=float))
+    return compat.evaluate(e, msh, np.array([0], dtype=np.int32)).reshape(expr.ufl_shape)

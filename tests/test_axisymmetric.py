@@ -14,7 +14,6 @@ import math
 
 import numpy as np
 import pytest
-import ufl
 from mpi4py import MPI
 
 from comove_dolfinx import geometry

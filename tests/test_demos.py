@@ -9,7 +9,6 @@ import subprocess
 import sys
 
 import pytest
-
 from test_elastica import read_history
 
 DEMOS = pathlib.Path(__file__).resolve().parent.parent / "demos"

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 import ufl
 from dolfinx import fem
-from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from comove_dolfinx import geometry
@@ -144,25 +143,15 @@ def test_invalid_input(call, word):
         call()
 
 
-def test_fix_coordinate_element_sets_the_variant():
-    msh = dmesh.create_unit_square(MPI.COMM_SELF, 1, 1)
-    assert msh.ufl_domain().ufl_coordinate_element()._sub_element._variant is None
-    geometry.fix_coordinate_element(msh)
-    element = msh.ufl_domain().ufl_coordinate_element()
-    assert element._sub_element._variant == "equispaced" and element.degree() == 1
-    geometry.fix_coordinate_element(msh)  # idempotent
-    assert msh.ufl_domain().ufl_coordinate_element() is element
-
-
 JIT_SCRIPT = textwrap.dedent("""
     import logging, sys
     logging.disable(logging.INFO)
     import ufl
     from dolfinx import fem
     from mpi4py import MPI
-    from comove_dolfinx import geometry
+    from comove_dolfinx import compat, geometry
     md = geometry.rectangle(1.0, 1.0, 0.5, comm=MPI.COMM_SELF, cache_dir=sys.argv[1])
-    V = fem.VectorFunctionSpace(md.mesh, ("CG", 2))
+    V = compat.function_space(md.mesh, "Lagrange", 2, (2,))
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     fem.form(ufl.inner(u, v) * ufl.dx)   # the first compilation used to change the mesh's element
     fem.form(ufl.div(v) * ufl.ds)        # and with it the cache key of this one

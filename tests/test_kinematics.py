@@ -6,6 +6,7 @@ from conftest import evaluate
 from dolfinx import fem
 from mpi4py import MPI
 
+from comove_dolfinx import compat
 from comove_dolfinx import kinematics as kin
 
 
@@ -50,7 +51,7 @@ def test_rigid_increment_gives_zero_strain(unit_mesh, deg):
 
 
 def _p2_fields(msh):
-    V = fem.VectorFunctionSpace(msh, ("CG", 2))
+    V = compat.function_space(msh, "Lagrange", 2, (2,))
     u, v = fem.Function(V), fem.Function(V)
     u.interpolate(lambda x: np.stack([0.3 * x[0] * x[1] + 0.1 * x[1] ** 2, -0.2 * x[0] ** 2 + 0.15 * x[0]]))
     v.interpolate(lambda x: np.stack([0.5 * x[1] ** 2 - 0.2 * x[0], 0.4 * x[0] * x[1] + 0.1]))
@@ -109,7 +110,7 @@ def test_embeddings(unit_mesh):
     """Plane strain F_zz = 1; axisymmetric F_zz = 1 + u_r/r; plane stress needs the thickness stretch."""
     from dolfinx import mesh
     msh = mesh.create_rectangle(MPI.COMM_SELF, [[1.0, 0.0], [2.0, 1.0]], [1, 1])
-    V = fem.VectorFunctionSpace(msh, ("CG", 1))
+    V = compat.function_space(msh, "Lagrange", 1, (2,))
     u = fem.Function(V)
     u.interpolate(lambda x: np.stack([0.1 * x[0], 0.0 * x[1]]))     # u_r = 0.1 r: hoop strain 0.1
     x = ufl.SpatialCoordinate(msh)

@@ -6,8 +6,15 @@ Stored tensors are (xx, yy, zz, xy) with the tensor shear component; see the mod
 import numpy as np
 import pytest
 
-from comove_dolfinx.materials import (MODELS, Elastic, Hardening, MaterialError, chen_update, j2_return,
-                                      von_mises)
+from comove_dolfinx.materials import (
+    MODELS,
+    Elastic,
+    Hardening,
+    MaterialError,
+    chen_update,
+    j2_return,
+    von_mises,
+)
 
 # the ring's mild steel (scenes.md), kg/cm^2
 STEEL_EL = Elastic(1.89e6, 0.3)

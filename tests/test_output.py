@@ -86,6 +86,7 @@ def test_xdmf_keeps_every_p2_node(tmp_path, n):
     import json
     import subprocess
     import sys
+
     from test_elastica import _cli, read_history
     out = tmp_path / "run"
     p = _cli(["run", "elastica", "--no-progress", "--out", str(out), "--set", "n_steps=3",
@@ -123,6 +124,7 @@ def test_xdmf_contact_pressure_is_the_contact_law(tmp_path):
     import json
     import subprocess
     import sys
+
     from comove_dolfinx.contact import Contact, Plane
     from comove_dolfinx.output import XDMFOutput
     q = 20.0

@@ -48,8 +48,9 @@ class NoRotationUpdate(updates.StressUpdate):
     name = "no_rotation"
 
     def build(self, u, u_n, state_n):
-        from comove_dolfinx.kinematics import increment_gradient
         import ufl
+
+        from comove_dolfinx.kinematics import increment_gradient
         dH = increment_gradient(self.F(u), self.F(u_n))
         sig = to_tensor(state_n) + updates.hooke(ufl.sym(dH), self.elastic, self.kin.model)
         return updates.UpdateExpr(sig, sig)

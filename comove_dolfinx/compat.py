@@ -1,0 +1,218 @@
+"""Every dolfinx, basix and ufl call whose API differs between the supported versions.
+
+comove_dolfinx runs on three API levels, chosen at import time from ``dolfinx.__version__``:
+
+* 0.5  (Debian 12's python3-dolfinx-real 0.5.2): ufl elements, ``VectorFunctionSpace``, ``u.vector``,
+  ``jit_params``, ``Expression.eval(cells)``, ``scale=`` in the lifting;
+* 0.9  (Debian 13's python3-dolfinx-real 0.9.0): basix.ufl elements and ``fem.functionspace``,
+  ``x.petsc_vec``, ``jit_options``, ``Expression.eval(mesh, cells)``, ``alpha=``, 2-D dofmap arrays;
+* 0.11 (the current release; the PyPI wheel dolfinx-solver-real): as 0.9, and ``dolfinx.io.gmsh``
+  whose ``model_to_mesh`` returns a named tuple.
+
+Nothing else in the package touches these APIs or a private attribute. The differences were found by
+running the test suite on each level (facts listed per function).
+"""
+from __future__ import annotations
+
+import basix
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+SUPPORTED = ("0.5", "0.9", "0.11")
+VERSION = tuple(int(v) for v in dolfinx.__version__.split(".")[:2])
+LEVEL = f"{VERSION[0]}.{VERSION[1]}"
+_OLD = VERSION < (0, 9)
+
+ScalarType = PETSc.ScalarType
+
+_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral}
+
+
+def check_version() -> None:
+    """SystemExit naming the tested API levels unless the installed dolfinx is one of them."""
+    if LEVEL not in SUPPORTED:
+        raise SystemExit(f"comove_dolfinx is tested with dolfinx {', '.join(SUPPORTED)} (Debian 12, "
+                         f"Debian 13, the current PyPI release); found {dolfinx.__version__}. "
+                         "Install one of these (see README, Platforms).")
+
+
+# ------------------------------------------------------------------------------------------------
+# Spaces and elements
+# ------------------------------------------------------------------------------------------------
+def cell_name(mesh) -> str:
+    """'triangle' or 'quadrilateral'."""
+    return mesh.ufl_cell().cellname()
+
+
+def function_space(mesh, family: str, degree: int, shape: tuple = ()):
+    """A Lagrange ("Lagrange") or discontinuous Lagrange ("DG") space of scalars, vectors (n,) or
+    tensors (n, m). Degree <= 2, where the Lagrange variants of the versions share their points."""
+    if family not in ("Lagrange", "DG"):
+        raise ValueError(f"family {family!r}: Lagrange or DG")
+    shape = tuple(shape)
+    if _OLD:
+        fam = "CG" if family == "Lagrange" else "DG"
+        if shape == ():
+            return fem.FunctionSpace(mesh, (fam, degree))
+        if len(shape) == 1 and shape[0] == mesh.geometry.dim:
+            return fem.VectorFunctionSpace(mesh, (fam, degree))
+        cell = mesh.ufl_cell()
+        if len(shape) == 1:
+            return fem.FunctionSpace(mesh, ufl.VectorElement(fam, cell, degree, dim=shape[0]))
+        return fem.TensorFunctionSpace(mesh, (fam, degree), shape=shape)
+    return fem.functionspace(mesh, (family, degree, shape) if shape else (family, degree))
+
+
+def quadrature_space(mesh, degree: int, shape: tuple = ()):
+    """Space of values at the points of the default quadrature rule of ``degree`` (scalars, vectors
+    (n,) or tensors (n, m)); its dofmap is the identity, cell by cell, then point, then component."""
+    shape = tuple(shape)
+    cell = mesh.ufl_cell()
+    if _OLD:
+        if shape == ():
+            el = ufl.FiniteElement("Quadrature", cell, degree, quad_scheme="default")
+        elif len(shape) == 1:
+            el = ufl.VectorElement("Quadrature", cell, degree, dim=shape[0], quad_scheme="default")
+        else:
+            el = ufl.TensorElement("Quadrature", cell, degree, shape=shape, quad_scheme="default")
+        return fem.FunctionSpace(mesh, el)
+    import basix.ufl
+    el = basix.ufl.quadrature_element(cell.cellname(), value_shape=shape, scheme="default",
+                                      degree=degree)
+    return fem.functionspace(mesh, el)
+
+
+def element_degree(V) -> int:
+    """Polynomial degree of a (possibly blocked) Lagrange space."""
+    el = V.ufl_element()
+    if _OLD:
+        sub = el.sub_elements()[0] if el.num_sub_elements() else el
+        return sub.degree()
+    return el.embedded_superdegree
+
+
+def cell_dofs(V, num_cells: int) -> np.ndarray:
+    """Dofs (block numbers) of the first ``num_cells`` cells, shape (num_cells, dofs per cell)."""
+    dl = V.dofmap.list
+    arr = dl.array.reshape(-1, V.dofmap.dof_layout.num_dofs) if _OLD else np.asarray(dl)
+    return arr[:num_cells]
+
+
+def lagrange_tabulate(cell: str, degree: int, points: np.ndarray) -> np.ndarray:
+    """Values (points, dofs) of the discontinuous Lagrange basis on the reference cell (equispaced
+    points, which all versions use up to degree 2)."""
+    ct, fam, var = _CELLS[cell], basix.ElementFamily.P, basix.LagrangeVariant.equispaced
+    if _OLD:
+        el = basix.create_element(fam, ct, degree, var, True)
+    else:
+        el = basix.create_element(fam, ct, degree, var, discontinuous=True)
+    return el.tabulate(0, points)[0, :, :, 0]
+
+
+def fix_coordinate_element(mesh) -> None:
+    """dolfinx 0.5 / ffcx 0.5 only: give the mesh's coordinate element the variant "equispaced"
+    before the first compilation (ffcx sets it in place at the first compilation, which changes the
+    cache keys of the forms compiled later in the process). Not needed from 0.9 on."""
+    if not _OLD:
+        return
+    domain = mesh.ufl_domain()
+    element = domain.ufl_coordinate_element()
+    if element._sub_element._variant is None:
+        scalar = ufl.FiniteElement(element.family(), element.cell(), element.degree(),
+                                   element.quadrature_scheme(), variant="equispaced")
+        domain._ufl_coordinate_element = ufl.VectorElement(scalar)
+
+
+def cell_sizes(mesh, cells: np.ndarray) -> np.ndarray:
+    """Cell diameters (circumdiameter of triangles) of the given local cells."""
+    tdim = mesh.topology.dim
+    if _OLD:
+        return dolfinx.cpp.mesh.h(mesh._mesh, tdim, cells)
+    return mesh.h(tdim, cells)
+
+
+def geometry_degree(mesh) -> int:
+    return mesh.geometry.cmap.degree
+
+
+# ------------------------------------------------------------------------------------------------
+# Forms, expressions, PETSc objects
+# ------------------------------------------------------------------------------------------------
+def form(expr, jit_options: dict | None = None):
+    if _OLD:
+        return fem.form(expr, jit_params=jit_options or {})
+    return fem.form(expr, jit_options=jit_options or {})
+
+
+def expression(expr, points: np.ndarray):
+    return fem.Expression(expr, points)
+
+
+def evaluate(expr, mesh, cells: np.ndarray) -> np.ndarray:
+    """Values of a compiled expression at its points in the given cells, (cells, points * size)."""
+    vals = expr.eval(cells) if _OLD else expr.eval(mesh, cells)
+    return np.asarray(vals).reshape(len(cells), -1)
+
+
+def petsc_vec(f) -> PETSc.Vec:
+    """The PETSc vector sharing the memory of a Function's dofs."""
+    return f.vector if _OLD else f.x.petsc_vec
+
+
+def create_matrix(a) -> PETSc.Mat:
+    return fem_petsc.create_matrix(a)
+
+
+def create_vector(L) -> PETSc.Vec:
+    if VERSION >= (0, 10):
+        return fem_petsc.create_vector(L.function_spaces[0])
+    return fem_petsc.create_vector(L)
+
+
+def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
+                    alpha: float = -1.0) -> None:
+    """Zero b and assemble the linear form L; with a bilinear form ``a``, lift the Dirichlet values
+    of ``bcs`` relative to x and set the constraint rows to alpha (g - x), as Newton needs. Ghost
+    contributions are summed once, after the lifting, so the owned entries are complete."""
+    with b.localForm() as loc:
+        loc.set(0.0)
+    fem_petsc.assemble_vector(b, L)
+    if a is not None:
+        if _OLD:
+            fem_petsc.apply_lifting(b, [a], bcs=[list(bcs)], x0=[x], scale=alpha)
+        else:
+            fem_petsc.apply_lifting(b, [a], bcs=[list(bcs)], x0=[x], alpha=alpha)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    if a is None:
+        return
+    if _OLD:
+        fem_petsc.set_bc(b, list(bcs), x, alpha)
+    elif VERSION >= (0, 10):
+        for bc in bcs:
+            bc.set(b.array_w, x.array_r, alpha)
+    else:
+        fem_petsc.set_bc(b, list(bcs), x, alpha)
+
+
+def assemble_matrix(A: PETSc.Mat, a, bcs=()) -> None:
+    """Zero A and assemble the bilinear form with the Dirichlet rows and columns of ``bcs``."""
+    A.zeroEntries()
+    fem_petsc.assemble_matrix(A, a, bcs=list(bcs))
+    A.assemble()
+
+
+# ------------------------------------------------------------------------------------------------
+# Meshes from Gmsh
+# ------------------------------------------------------------------------------------------------
+def model_to_mesh(model, comm, rank: int, gdim: int = 2):
+    """(mesh, cell tags, facet tags) of the gmsh model held by ``rank``."""
+    if VERSION >= (0, 10):
+        from dolfinx.io import gmsh as gmsh_io
+        data = gmsh_io.model_to_mesh(model, comm, rank, gdim=gdim)
+        return data.mesh, data.cell_tags, data.facet_tags
+    from dolfinx.io import gmshio
+    return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)

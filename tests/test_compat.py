@@ -1,0 +1,28 @@
+"""One compatibility module: no other file of the package (or of the tests and demos) touches an API
+that differs between the supported dolfinx versions, or a private attribute of dolfinx, basix or ufl.
+The patterns are those that changed between 0.5, 0.9 and 0.11 (comove_dolfinx/compat.py)."""
+import pathlib
+import re
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+VERSIONED = [
+    r"VectorFunctionSpace", r"TensorFunctionSpace", r"fem\.FunctionSpace\(", r"fem\.functionspace\(",
+    r"ufl\.(Finite|Vector|Tensor|Mixed)Element", r"basix\.ufl", r"\.vector\b", r"petsc_vec",
+    r"jit_(params|options)\s*=", r"gmshio", r"dolfinx\.io\.gmsh\b", r"dofmap\.list",
+    r"apply_lifting", r"set_bc\(", r"cpp\.mesh", r"\._mesh\b", r"_sub_element", r"\._cpp_object",
+    r"\.sub_elements\(", r"\.degree\(\)", r"basix\.create_element", r"fem\.Expression\(",
+    r"\.eval\(", r"create_vector\(", r"create_matrix\(", r"assemble_matrix\(",
+]
+FILES = [p for d in ("comove_dolfinx", "tests", "demos") for p in sorted((ROOT / d).glob("*.py"))
+         if p.name not in ("compat.py", "test_compat.py")]
+
+
+@pytest.mark.parametrize("path", FILES, ids=[f"{p.parent.name}/{p.name}" for p in FILES])
+def test_versioned_apis_only_in_compat(path):
+    bad = []
+    for n, line in enumerate(path.read_text().splitlines(), 1):
+        code = re.sub(r"compat\.\w+", "", line.split("#", 1)[0])   # calls into compat are the point
+        bad += [f"{path.name}:{n}: {line.strip()}" for pat in VERSIONED if re.search(pat, code)]
+    assert not bad, "\n".join(bad)
