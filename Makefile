@@ -2,24 +2,56 @@
 #   make demo   install what is missing, then run the main job (the beam scene)
 #   make test   install what is missing, then run the test suite (serial and 2 MPI ranks)
 #   make bench  run the speed/accuracy benchmarks (writes results/bench/)
-# Debian 12: the FEniCSx stack comes from Debian's packages and serves /usr/bin/python3 only,
-# so the virtual environment is made from that interpreter with --system-site-packages.
+#
+# Where dolfinx comes from (DOLFINX=auto|apt|pip; README, Platforms):
+#   apt   Debian's packages: Debian 12 has dolfinx 0.5.2, Debian 13 has 0.9. They serve
+#         /usr/bin/python3 only, so the venv is made from it with --system-site-packages.
+#   pip   the PyPI wheel dolfinx-solver-real (the current release, 0.11, with PETSc, MUMPS and MPICH
+#         from PyPI) in a venv of its own (no system site packages: nothing of Debian's FEniCSx
+#         stack mixes in); needs Python >= 3.12.
+#   auto  apt on Debian 12 and 13, pip anywhere else.
+# A venv remembers its source; use VENV=... for a second one (CI tests 0.11 in .venv-pip).
 
 SYSPY   := /usr/bin/python3
-VENV    := .venv
+VENV    ?= .venv
 PY      := $(VENV)/bin/python
 SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+DOLFINX ?= auto
+OS_ID   := $(shell . /etc/os-release 2>/dev/null; echo "$$ID$$VERSION_ID")
+ifeq ($(DOLFINX),auto)
+SOURCE  := $(if $(filter debian12 debian13,$(OS_ID)),apt,pip)
+else
+SOURCE  := $(DOLFINX)
+endif
+ifeq ($(filter apt pip,$(SOURCE)),)
+$(error DOLFINX=$(DOLFINX): use apt, pip or auto)
+endif
+
 APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-pytest python3-venv \
             python3-pip python3-setuptools python3-wheel python3-tqdm python3-meshio python3-h5py \
             openmpi-bin libopenblas0
+# the pip path compiles forms with the system's C compiler; PyPI's gmsh needs a few X/GL libraries
+PIP_APT_PKGS := gcc libc6-dev libglu1-mesa libxcursor1 libxft2 libxinerama1
+PIP_PKGS := "dolfinx-solver-real==0.11.*" gmsh matplotlib tqdm pytest meshio h5py
+# the first Python >= 3.12 among python3.13, python3.12, pyenv's versions and python3
+PIP_PYTHON ?= $(shell for p in python3.13 python3.12 \
+    $$(ls -d $${PYENV_ROOT:-$$HOME/.pyenv}/versions/3.1[2-9]*/bin/python3 2>/dev/null | sort -rV) python3; do \
+    $$p -c 'import sys; sys.exit(sys.version_info < (3, 12))' 2>/dev/null && { command -v $$p; break; }; done)
+
 NP      ?= 2
-# mpirun as root and on machines with fewer cores than ranks
+# mpirun as root and with more ranks than cores (Open MPI 4 and 5); MPICH's mpiexec needs neither
 export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
+export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 export OPENBLAS_NUM_THREADS := 1
 export MPLBACKEND := Agg
+ifeq ($(SOURCE),pip)
+MPIRUN  := $(VENV)/bin/mpiexec -n $(NP)
+else
 MPIRUN  := mpirun -n $(NP)
+endif
+STAMP   := $(VENV)/.installed-$(SOURCE)
 
 .PHONY: all system venv demo test test-serial test-mpi bench clean
 
@@ -27,7 +59,10 @@ all: demo
 
 # Installs the Debian packages that are missing (apt-get as root, sudo otherwise).
 system:
-	@missing=""; for p in $(APT_PKGS); do \
+	@pkgs="$(if $(filter apt,$(SOURCE)),$(APT_PKGS),$(PIP_APT_PKGS))"; \
+	if ! command -v dpkg-query >/dev/null; then \
+	  echo "not a Debian system: make sure a C compiler is installed (the forms are compiled)"; exit 0; fi; \
+	missing=""; for p in $$pkgs; do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
@@ -36,19 +71,34 @@ system:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
 	fi
 
-# The venv and the editable install; never pulls numpy, gmsh, mpi4py, petsc4py or FEniCS from PyPI.
-$(VENV)/.installed: pyproject.toml | system
+# The venv and the editable install. apt: never pulls numpy, gmsh, mpi4py, petsc4py or FEniCS from
+# PyPI. pip: everything from PyPI, nothing from the system.
+$(VENV)/.installed-apt: pyproject.toml | system
+	@if [ -e $(VENV)/.installed-pip ]; then echo "$(VENV) holds the PyPI dolfinx: 'make clean' or choose \
+	another VENV=..."; exit 2; fi
 	$(SYSPY) -m venv --system-site-packages $(VENV)
 	$(PY) -m pip install -q --no-deps --no-build-isolation -e .
 	$(PY) -c "import comove_dolfinx; comove_dolfinx.check_platform()"
 	touch $@
 
-venv: system $(VENV)/.installed
+$(VENV)/.installed-pip: pyproject.toml | system
+	@if [ -e $(VENV)/.installed-apt ]; then echo "$(VENV) holds Debian's dolfinx: 'make clean' or choose \
+	another VENV=..."; exit 2; fi
+	@if [ -z "$(PIP_PYTHON)" ]; then echo "DOLFINX=pip needs Python >= 3.12 (python3.12 or newer on PATH, \
+	or PIP_PYTHON=/path/to/python3)"; exit 2; fi
+	$(PIP_PYTHON) -m venv $(VENV)
+	$(VENV)/bin/pip install -q $(PIP_PKGS)
+	$(VENV)/bin/pip install -q --no-deps -e .
+	$(PY) -c "import comove_dolfinx; comove_dolfinx.check_platform()"
+	touch $@
+
+venv: system $(STAMP)
 
 demo: venv
 	$(VENV)/bin/comove run beam --out results/beam
 
 test: venv
+	@$(PY) -c "import dolfinx; print('testing with dolfinx', dolfinx.__version__, '($(SOURCE))')"
 	$(PY) -m pytest -q tests
 	$(MPIRUN) $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
 

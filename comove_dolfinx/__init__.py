@@ -8,6 +8,11 @@ Units are whatever the user supplies consistently; the scenes use cm and kgf.
 
 __version__ = "0.1.0"
 
+try:        # the PyPI wheel of dolfinx: its bootstrap loads mpi4py's MPI ahead of dolfinx's bindings
+    import dolfinx_solver  # noqa: F401
+except ModuleNotFoundError:
+    pass
+
 
 def check_platform() -> None:
     """Fail with a clear message unless a supported dolfinx (0.5, 0.9, 0.11) and gmsh are importable."""

@@ -44,8 +44,9 @@ def check_version() -> None:
 # Spaces and elements
 # ------------------------------------------------------------------------------------------------
 def cell_name(mesh) -> str:
-    """'triangle' or 'quadrilateral'."""
-    return mesh.ufl_cell().cellname()
+    """'triangle' or 'quadrilateral' (a method of ufl.Cell up to ufl 2025, a property from 2026)."""
+    name = mesh.ufl_cell().cellname
+    return name() if callable(name) else name
 
 
 def function_space(mesh, family: str, degree: int, shape: tuple = ()):
@@ -81,7 +82,7 @@ def quadrature_space(mesh, degree: int, shape: tuple = ()):
             el = ufl.TensorElement("Quadrature", cell, degree, shape=shape, quad_scheme="default")
         return fem.FunctionSpace(mesh, el)
     import basix.ufl
-    el = basix.ufl.quadrature_element(cell.cellname(), value_shape=shape, scheme="default",
+    el = basix.ufl.quadrature_element(cell_name(mesh), value_shape=shape, scheme="default",
                                       degree=degree)
     return fem.functionspace(mesh, el)
 
@@ -100,6 +101,14 @@ def cell_dofs(V, num_cells: int) -> np.ndarray:
     dl = V.dofmap.list
     arr = dl.array.reshape(-1, V.dofmap.dof_layout.num_dofs) if _OLD else np.asarray(dl)
     return arr[:num_cells]
+
+
+def geometry_dofs(mesh) -> np.ndarray:
+    """Geometry nodes of every local cell, shape (cells, nodes per cell)."""
+    geo = mesh.geometry
+    if _OLD:
+        return geo.dofmap.array.reshape(geo.dofmap.num_nodes, -1)
+    return np.asarray(geo.dofmaps[0] if VERSION >= (0, 10) else geo.dofmap)
 
 
 def lagrange_tabulate(cell: str, degree: int, points: np.ndarray) -> np.ndarray:
@@ -136,7 +145,9 @@ def cell_sizes(mesh, cells: np.ndarray) -> np.ndarray:
 
 
 def geometry_degree(mesh) -> int:
-    return mesh.geometry.cmap.degree
+    """Degree of the coordinate element (one per mesh; 0.10 lists them as cmaps)."""
+    geo = mesh.geometry
+    return (geo.cmaps[0] if VERSION >= (0, 10) else geo.cmap).degree
 
 
 # ------------------------------------------------------------------------------------------------

@@ -23,8 +23,7 @@ class QuadratureRule:
     def __init__(self, mesh, degree: int):
         self.mesh = mesh
         self.degree = degree
-        cell = mesh.ufl_cell()
-        self.points, self.weights = basix.make_quadrature(_CELLS[cell.cellname()], degree)
+        self.points, self.weights = basix.make_quadrature(_CELLS[compat.cell_name(mesh)], degree)
         imap = mesh.topology.index_map(mesh.topology.dim)
         self.num_cells_local = imap.size_local
         self.cells = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
@@ -79,7 +78,7 @@ class CellInterpolator:
 
     def __init__(self, rule: QuadratureRule, V_dg):
         k = compat.element_degree(V_dg)
-        B = compat.lagrange_tabulate(rule.mesh.ufl_cell().cellname(), k, rule.points)  # (points, dofs)
+        B = compat.lagrange_tabulate(compat.cell_name(rule.mesh), k, rule.points)  # (points, dofs)
         BW = B.T * rule.weights
         self.proj = np.linalg.solve(BW @ B, BW)                      # (dofs, points)
         self.dofs = compat.cell_dofs(V_dg, len(rule.cells))

@@ -10,10 +10,10 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 VERSIONED = [
     r"VectorFunctionSpace", r"TensorFunctionSpace", r"fem\.FunctionSpace\(", r"fem\.functionspace\(",
     r"ufl\.(Finite|Vector|Tensor|Mixed)Element", r"basix\.ufl", r"\.vector\b", r"petsc_vec",
-    r"jit_(params|options)\s*=", r"gmshio", r"dolfinx\.io\.gmsh\b", r"dofmap\.list",
+    r"jit_(params|options)\s*=", r"gmshio", r"dolfinx\.io\.gmsh\b", r"dofmap\.(list|array)", r"geometry\.dofmap", r"geometry\.cmaps?\b",
     r"apply_lifting", r"set_bc\(", r"cpp\.mesh", r"\._mesh\b", r"_sub_element", r"\._cpp_object",
     r"\.sub_elements\(", r"\.degree\(\)", r"basix\.create_element", r"fem\.Expression\(",
-    r"\.eval\(", r"create_vector\(", r"create_matrix\(", r"assemble_matrix\(",
+    r"\.eval\(", r"\.cellname\(", r"create_vector\(", r"create_matrix\(", r"assemble_matrix\(",
 ]
 FILES = [p for d in ("comove_dolfinx", "tests", "demos") for p in sorted((ROOT / d).glob("*.py"))
          if p.name not in ("compat.py", "test_compat.py")]

@@ -3,11 +3,9 @@ their pictures and XDMF file, and end where the physics puts them: the beam's ti
 rest on the obstacle (displacement = gap, to the penalty's penetration), the crushed ring carries more
 than the rigid-perfectly-plastic ring (DeRunz-Hodge), and two ranks give the serial history."""
 import math
-import os
 import pathlib
-import subprocess
-import sys
 
+import launch
 import pytest
 from test_elastica import read_history
 
@@ -15,14 +13,10 @@ DEMOS = pathlib.Path(__file__).resolve().parent.parent / "demos"
 
 
 def _demo(name, out, sets=(), n=1):
-    env = dict(os.environ, MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
-               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
-    cmd = [sys.executable, str(DEMOS / f"demo_{name}.py"), "--out", str(out)]
+    args = [DEMOS / f"demo_{name}.py", "--out", out]
     for s in sets:
-        cmd += ["--set", s]
-    if n > 1:
-        cmd = ["mpirun", "-n", str(n), *cmd]
-    p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+        args += ["--set", s]
+    p = launch.run(args, n=n)
     assert p.returncode == 0, p.stdout + p.stderr
     for f in ("results.xdmf", "results.h5", "history.csv", f"{name}_shapes.png", f"{name}_curves.png"):
         assert (out / f).is_file(), f

@@ -1,9 +1,7 @@
 """The elastica verification scene against the inextensible elastica (theory.md 7.1), every update."""
 import csv
-import os
-import subprocess
-import sys
 
+import launch
 import pytest
 
 from comove_dolfinx.job import run_scene
@@ -36,12 +34,7 @@ def test_elastica_tip(update, mpi_tmp):
 
 
 def _cli(args, n=1, cwd=None):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", OPENBLAS_NUM_THREADS="1")
-    cmd = [sys.executable, "-m", "comove_dolfinx.cli", *args]
-    if n > 1:
-        cmd = ["mpirun", "-n", str(n), *cmd]
-    return subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd, timeout=600)
+    return launch.run(["-m", "comove_dolfinx.cli", *args], n=n, cwd=cwd)
 
 
 def test_one_and_two_ranks_give_the_same_history(tmp_path):

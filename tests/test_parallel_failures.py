@@ -1,17 +1,16 @@
 """A failure on one MPI rank is a failure on every rank, never a deadlock.
 
-Each case runs a small plastic block on two ranks in a process of its own (mpirun, with a time limit:
+Each case runs a small plastic block on two ranks in a process of its own (mpirun or mpiexec, with a time limit:
 a deadlock shows as a timeout) and injects a failure on one rank only: the return map raising at that
 rank's points, a callback (a file write) failing on rank 0, an error out of one rank's share of the
 linear solve. The ranks must agree: a failed constitutive update or linear solve is a failed Newton
 iteration, so every rank cuts the increment back and the run goes on to the same end; a failed
 callback stops every rank with the same error.
 """
-import os
 import subprocess
-import sys
 import textwrap
 
+import launch
 import pytest
 
 COMMON = """
@@ -83,11 +82,8 @@ report(f"completed={res.completed} increments={len(res.increments)} "
 def _run_two_ranks(tmp_path, script):
     path = tmp_path / "case.py"
     path.write_text(textwrap.dedent(script))
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
-               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
     try:
-        p = subprocess.run(["mpirun", "-n", "2", sys.executable, str(path), str(tmp_path)],
-                           capture_output=True, text=True, env=env, timeout=240)
+        p = launch.run([path, tmp_path], n=2, timeout=240)
     except subprocess.TimeoutExpired as err:
         pytest.fail(f"deadlock: the two ranks did not finish ({err.stdout!r})")
     lines = sorted(line for line in p.stdout.splitlines() if line.startswith("rank "))

@@ -7,7 +7,13 @@ from mpi4py import MPI
 
 from comove_dolfinx import compat
 from comove_dolfinx.scenes import get_scene
-from comove_dolfinx.solver import IncrementalSolver, Newton, NewtonSettings, StepSettings, _extrapolate
+from comove_dolfinx.solver import (
+    IncrementalSolver,
+    Newton,
+    NewtonSettings,
+    StepSettings,
+    _extrapolate,
+)
 
 # lam = 2 of the inextensible elastica (theory.md 7.1): v/L
 ELASTICA_2 = 0.49346

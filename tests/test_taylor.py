@@ -77,7 +77,7 @@ def _check(m, c, law, method, friction):
 
 
 def _order(m):
-    result = taylor_test(m, h0=1e-3, n=8)
+    result = taylor_test(m, h0=1e-3, n=10)
     return result.orders, str(result)
 
 
