@@ -98,7 +98,7 @@ demo: venv
 	$(VENV)/bin/comove run beam --out results/beam
 
 test: venv
-	@$(PY) -c "import dolfinx; print('testing with dolfinx', dolfinx.__version__, '($(SOURCE))')"
+	@$(PY) -c "import comove_dolfinx, dolfinx; print('testing with dolfinx', dolfinx.__version__, '($(SOURCE))')"
 	$(PY) -m pytest -q tests
 	$(MPIRUN) $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
 

@@ -275,7 +275,7 @@ class Contact:
     def commit(self, model) -> None:
         """Called before the model's own state moves to the new increment (u_n still the old one)."""
         if self.mu > 0 and self.method == "penalty":
-            vals = self._assemble_vec(self._e_form)
+            vals = self._assemble_vec(self._form("e"))
             m = self._lumped
             b = self._sdofs             # the boundary's nodes (elsewhere m is round-off)
             self.e_n.x.array[b] = vals[b] / m[b]
@@ -293,47 +293,47 @@ class Contact:
         """True Coulomb: take the threshold from the current solution; True if it changed notably."""
         if not (self.relag and self.mu > 0):
             return False
-        p_old = self._assemble_vec(self._p_lag_form)
+        p_old = self._assemble_vec(self._form("p_lag"))
         self.u_lag.x.array[:] = model.u.x.array
         self._d_lag.value = self.obstacle.displacement(self.t)
-        p_new = self._assemble_vec(self._p_lag_form)
+        p_new = self._assemble_vec(self._form("p_lag"))
         scale = max(np.abs(p_new).max(), 1e-300)
         change = model.comm.allreduce(float(np.abs(p_new - p_old).max()) / scale, op=MPI.MAX)
         return change > self.relag_tol
 
     # -- results -----------------------------------------------------------------------------------
     def _build_outputs(self, model, n_o, t_o):
+        """The forms of the results (compiled on first use: a run that never asks for one does not
+        pay its compilation)."""
         msh = model.mesh
         e = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))
         self._e = e
-        self._force_form = fem.form(-ufl.replace(self.R_c, {model.v: e}))
         S = compat.function_space(msh, "Lagrange", model.degree)
         phi = ufl.TestFunction(S)
         F = model.update.F(model.u)
         N = ufl.FacetNormal(msh)
         N3 = ufl.as_vector([N[0], N[1], 0.0])
         stretch = ufl.sqrt(ufl.dot(ufl.det(F) * ufl.inv(F).T * N3, ufl.det(F) * ufl.inv(F).T * N3))
-        self._mass = fem.form(phi * self.ds_c)
         # current length of the contact set: in-plane stretch of the boundary where p > 0
         F2 = ufl.Identity(2) + ufl.grad(model.u)
         T = ufl.as_vector([-N[1], N[0]])
         chi = ufl.conditional(ufl.gt(self.p_ref, 0.0), 1.0, 0.0)
-        self._extent_form = fem.form(chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * self.ds_c)
-        # reference length of the contact set that slips (friction at its threshold) and sticks
-        self._slip_form = None
+        dsc = self.ds_c
+        self._ufl = {"force": -ufl.replace(self.R_c, {model.v: e}), "mass": phi * dsc,
+                     "extent": chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * dsc,
+                     "p": self.p_ref / stretch * phi * dsc}
         if self.mu > 0:
+            # reference length of the contact set that slips (friction at its threshold) and sticks
             slipping = ufl.conditional(self._slipping, 1.0, 0.0)
-            self._slip_form = fem.form(chi * slipping * self.ds_c)
-            self._stick_form = fem.form(chi * (1.0 - slipping) * self.ds_c)
-        self._p_form = fem.form(self.p_ref / stretch * phi * self.ds_c)
-        self._q_form = fem.form(self.q_ref / stretch * phi * self.ds_c) if self.q_ref is not None else None
-        self._p_lag_form = fem.form(self._p_lag * phi * self.ds_c) if self.mu > 0 else None
-        if self.mu > 0 and self.method == "penalty":
-            self._e_form = fem.form(self._e_new * phi * self.ds_c)
+            self._ufl.update(slip=chi * slipping * dsc, stick=chi * (1.0 - slipping) * dsc,
+                             q=self.q_ref / stretch * phi * dsc, p_lag=self._p_lag * phi * dsc)
+            if self.method == "penalty":
+                self._ufl["e"] = self._e_new * phi * dsc
+        self._compiled = {}
         self.pressure = fem.Function(S, name="contact_pressure")
         self.shear = fem.Function(S, name="contact_shear")
-        self._vec = compat.create_vector(self._mass)
-        self._lumped = self._assemble_vec(self._mass)
+        self._vec = compat.create_vector(self._form("mass"))
+        self._lumped = self._assemble_vec(self._form("mass"))
         # nodes of the contact boundary (owned), for the contact zone
         fdim = msh.topology.dim - 1
         ft = model.meshdata.facet_tags
@@ -344,6 +344,12 @@ class Contact:
         self._X = model.V.tabulate_dof_coordinates()[self._nodes, :2]
         sdofs = fem.locate_dofs_topological(S, fdim, facets)
         self._sdofs = sdofs[sdofs < S.dofmap.index_map.size_local]
+
+    def _form(self, name: str):
+        """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
+        if name not in self._compiled:
+            self._compiled[name] = fem.form(self._ufl[name])
+        return self._compiled[name]
 
     def _assemble_vec(self, form) -> np.ndarray:
         """Owned entries of an assembled linear form on the boundary field space."""
@@ -364,17 +370,17 @@ class Contact:
         out = np.zeros(2)
         for i in range(2):
             self._e.value = np.eye(2)[i]
-            out[i] = self.model.comm.allreduce(fem.assemble_scalar(self._force_form), op=MPI.SUM)
+            out[i] = self.model.comm.allreduce(fem.assemble_scalar(self._form("force")), op=MPI.SUM)
         return out
 
     def update_fields(self) -> None:
         """Contact pressure and tangential traction (per current area) as boundary fields."""
         m = self._lumped
         b = self._sdofs
-        for form, f in ((self._p_form, self.pressure), (self._q_form, self.shear)):
-            if form is None:
+        for name, f in (("p", self.pressure), ("q", self.shear)):
+            if name not in self._ufl:
                 continue
-            vals = self._assemble_vec(form)
+            vals = self._assemble_vec(self._form(name))
             f.x.array[:] = 0.0
             f.x.array[b] = vals[b] / m[b]
             f.x.scatter_forward()
@@ -390,16 +396,16 @@ class Contact:
     def stick_slip(self) -> tuple[float, float]:
         """Reference lengths of the contact set where friction sticks and where it slips (zeros
         without friction), at the current iterate."""
-        if self._slip_form is None:
+        if "slip" not in self._ufl:
             return 0.0, 0.0
         comm = self.model.comm
         return tuple(comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM)
-                     for f in (self._stick_form, self._slip_form))
+                     for f in (self._form("stick"), self._form("slip")))
 
     def zone(self) -> ZoneInfo:
         """Contact extent (from the facet quadrature points) and the largest nodal penetration."""
         comm = self.model.comm
-        extent = comm.allreduce(fem.assemble_scalar(self._extent_form), op=MPI.SUM)
+        extent = comm.allreduce(fem.assemble_scalar(self._form("extent")), op=MPI.SUM)
         x = self._X + self.model.u.x.array.reshape(-1, 2)[self._nodes]
         g = self.obstacle.gap_np(x, self.t)
         pen = comm.allreduce(float(max(-g.min(), 0.0)) if g.size else 0.0, op=MPI.MAX)

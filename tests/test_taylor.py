@@ -88,28 +88,31 @@ def _assert_second_order(orders, text):
 
 
 CASES = (
-    # every stress update in every 2D model (elastic), penalty contact with slip
-    [dict(kind=k, update=u) for k in ("plane_strain", "plane_stress", "axisymmetric")
+    # every stress update in every 2D model (elastic), frictionless penalty contact
+    [dict(kind=k, update=u, friction="none") for k in ("plane_strain", "plane_stress", "axisymmetric")
      for u in ("sr", "hughes_winget", "polar", "svk", "neo_hooke")]
-    # plasticity: both laws, both rotating updates, every model
-    + [dict(kind=k, update=u, law=law) for k in ("plane_strain", "plane_stress", "axisymmetric")
-       for law in ("j2", "chen") for u in ("sr", "hughes_winget")]
-    # contact: every method and friction state, with plasticity, on a plane
-    + [dict(law="j2", method=meth, theta=th, friction=f) for meth, th in
-       (("penalty", 0), ("nitsche", 1), ("nitsche", 0), ("nitsche", -1))
+    # plasticity: both laws in every model (S-R update), and with Hughes-Winget
+    + [dict(kind=k, law=law) for k in ("plane_strain", "plane_stress", "axisymmetric")
+       for law in ("j2", "chen")]
+    + [dict(update="hughes_winget", law=law) for law in ("j2", "chen")]
+    # contact with plasticity: penalty and Nitsche (theta = 0) with each friction state, the other
+    # Nitsche variants slipping, and the circle
+    + [dict(law="j2", method=meth, theta=0, friction=f) for meth in ("penalty", "nitsche")
        for f in ("none", "slip", "stick")]
-    # the circle, and Nitsche with both laws in the other models
+    + [dict(law="j2", method="nitsche", theta=th) for th in (1, -1)]
     + [dict(law="j2", method=meth, theta=th, obstacle="circle") for meth, th in
-       (("penalty", 0), ("nitsche", 1), ("nitsche", 0), ("nitsche", -1))]
+       (("penalty", 0), ("nitsche", -1))]
+    # Nitsche's facet stress with both laws in the other models, and with the other updates
     + [dict(kind=k, law=law, method="nitsche", theta=0) for k in ("plane_stress", "axisymmetric")
        for law in ("j2", "chen")]
-    + [dict(kind="plane_stress", update=u, method="nitsche", theta=-1) for u in ("polar", "svk", "neo_hooke")]
+    + [dict(kind="plane_stress", update=u, method="nitsche", theta=-1, friction="none")
+       for u in ("polar", "svk", "neo_hooke")]
     + [dict(method=None), dict(method=None, kind="plane_stress", law="j2")]
 )
 
 
 def _id(case):
-    return "-".join(f"{v}" for v in case.values() if v is not None) or "default"
+    return "-".join("no_contact" if v is None else f"{v}" for v in case.values())
 
 
 @pytest.mark.parametrize("case", CASES, ids=[_id(c) for c in CASES])
