@@ -1,9 +1,18 @@
 """comove_dolfinx: large deformation of solids against rigid obstacles by the co-moving S-R method.
 
 The package solves large elastic and elastic-plastic deformations in 2D (plane stress, plane strain,
-axisymmetry) on dolfinx 0.5.2, with Chen's S-R decomposition of each increment, the convected stress
-update, follower loads and unilateral frictional contact with rigid obstacles.
+axisymmetry) on dolfinx 0.5, 0.9 and 0.11, with Chen's S-R decomposition of each increment, the
+convected stress update, follower loads and unilateral frictional contact with rigid obstacles.
 Units are whatever the user supplies consistently; the scenes use cm and kgf.
+
+The public API (docs/api.md), imported on first use so that ``import comove_dolfinx`` stays light::
+
+    import comove_dolfinx as cm
+    mesh = cm.rectangle(10.0, 0.5, 0.125)                   # or cm.load_msh("part.msh")
+    body = cm.Body(mesh, "plane_stress", cm.Elastic(1000.0, 0.3))
+    items = [cm.Fixed("left"), cm.Pressure("top", 0.5),
+             cm.Contact("bottom", cm.Plane((0, -3), (0, 1)), mu=0.1)]
+    results = cm.Job(body, items, [cm.Step(20)], probes=[cm.NodeDisplacement("tip", (10, 0))]).run()
 """
 
 __version__ = "0.1.0"
@@ -12,6 +21,37 @@ try:        # the PyPI wheel of dolfinx: its bootstrap loads mpi4py's MPI ahead 
     import dolfinx_solver  # noqa: F401
 except ModuleNotFoundError:
     pass
+
+
+_API = {
+    "geometry": ("MeshData", "MeshError", "rectangle", "annulus_sector", "plate_section", "quarter_disc",
+                 "load_msh", "from_dolfinx"),
+    "mechanics.body": ("Body", "BodyError"),
+    "mechanics.materials": ("Elastic", "J2", "Chen", "Hardening", "MaterialError"),
+    "loads": ("Fixed", "Displacement", "Pressure", "Traction", "BodyForce", "PointLoad", "ItemError"),
+    "contact": ("Contact", "Plane", "Circle", "Profile", "ContactError"),
+    "job": ("Step", "Job", "Results", "JobError"),
+    "solver": ("NewtonSettings",),
+    "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "Reaction", "MaxPlasticStrain", "Value"),
+    "io": ("HistoryCSV", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),
+    "presets": ("get_scene", "SCENES"),
+}
+_WHERE = {name: module for module, names in _API.items() for name in names}
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str):
+    """The public API, imported on first use (dolfinx is heavy)."""
+    if name not in _WHERE:
+        raise AttributeError(f"module 'comove_dolfinx' has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(list(globals()) + __all__)
 
 
 def check_platform() -> None:

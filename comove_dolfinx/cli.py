@@ -16,7 +16,7 @@ def _quiet_jit() -> None:
 
 
 def _scenes() -> int:
-    from .scenes import SCENES
+    from .presets import SCENES
     for name, cls in SCENES.items():
         print(f"{name}: {cls.summary}")
         for key, default, doc in cls.parameters():
@@ -24,33 +24,72 @@ def _scenes() -> int:
     return 0
 
 
+def _verbose(comm) -> None:
+    logging.disable(logging.NOTSET)
+    logger = logging.getLogger("comove")
+    logger.setLevel(logging.INFO)
+    logger.propagate = False           # the JIT libraries give the root logger a handler
+    if comm.rank == 0:
+        logger.addHandler(logging.StreamHandler(sys.stdout))
+    logging.getLogger().setLevel(logging.WARNING)
+
+
+def run_scene(scene, out_dir, comm=None, progress: bool = False):
+    """Run a preset ``scene`` into ``out_dir`` (history.csv, results.xdmf, run.json, the console's
+    lines); returns the :class:`Results`."""
+    import dataclasses
+    import pathlib
+
+    from mpi4py import MPI
+
+    from .io import XDMF, Console, HistoryCSV, RunInfo
+    from .parallel import on_root
+    from .solver import Timer
+
+    comm = comm or MPI.COMM_WORLD
+    out = pathlib.Path(out_dir)
+    on_root(comm, out.mkdir, parents=True, exist_ok=True)
+    timer = Timer()
+    with timer("mesh"):
+        md = scene.mesh_data(comm)
+    writers = [HistoryCSV(out / "history.csv"), XDMF(out / "results.xdmf", scene.fibres()),
+               RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
+               Console(scene.name, scene.columns)]
+    job = scene.job(md, writers)
+    return job.run(progress=progress)
+
+
+def _errors():
+    from .contact import ContactError
+    from .geometry import MeshError
+    from .job import JobError
+    from .loads import ItemError
+    from .mechanics.body import BodyError
+    from .mechanics.material_data import MaterialError
+    from .presets import SceneError
+    from .probes import ProbeError
+    return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError)
+
+
 def _run(args) -> int:
     from mpi4py import MPI
 
-    from .contact import ContactError
-    from .geometry import MeshError
-    from .job import run_scene
-    from .materials import MaterialError
-    from .scenes import SceneError, get_scene
+    from .presets import get_scene
 
+    comm = MPI.COMM_WORLD
+    errors = _errors()
     try:
         scene = get_scene(args.scene, args.set)
-    except (SceneError, MaterialError) as err:
-        if MPI.COMM_WORLD.rank == 0:
+    except errors as err:
+        if comm.rank == 0:
             print(f"comove: {err}", file=sys.stderr)
         return 2
     if args.verbose:
-        logging.disable(logging.NOTSET)
-        logger = logging.getLogger("comove")
-        logger.setLevel(logging.INFO)
-        logger.propagate = False           # the JIT libraries give the root logger a handler
-        if MPI.COMM_WORLD.rank == 0:
-            logger.addHandler(logging.StreamHandler(sys.stdout))
-        logging.getLogger().setLevel(logging.WARNING)
+        _verbose(comm)
     try:
         result = run_scene(scene, args.out, progress=not args.no_progress)
-    except (MeshError, SceneError, MaterialError, ContactError) as err:
-        if MPI.COMM_WORLD.rank == 0:
+    except errors as err:
+        if comm.rank == 0:
             print(f"comove: {err}", file=sys.stderr)
         return 2
     return 0 if result.completed else 1

@@ -185,10 +185,11 @@ def create_vector(L) -> PETSc.Vec:
 
 
 def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
-                    alpha: float = -1.0) -> None:
+                    alpha: float = -1.0, add=None) -> None:
     """Zero b and assemble the linear form L; with a bilinear form ``a``, lift the Dirichlet values
     of ``bcs`` relative to x and set the constraint rows to alpha (g - x), as Newton needs. Ghost
-    contributions are summed once, after the lifting, so the owned entries are complete."""
+    contributions are summed once, after the lifting, so the owned entries are complete. ``add``:
+    (owned dofs, values) added to b before the constraint rows are set (nodal forces)."""
     with b.localForm() as loc:
         loc.set(0.0)
     fem_petsc.assemble_vector(b, L)
@@ -198,6 +199,9 @@ def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
         else:
             fem_petsc.apply_lifting(b, [a], bcs=[list(bcs)], x0=[x], alpha=alpha)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    if add is not None:
+        with b.localForm() as loc:
+            loc.array[add[0]] += add[1]
     if a is None:
         return
     if _OLD:

@@ -33,7 +33,7 @@ from mpi4py import MPI
 
 from . import compat
 
-__all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "fix_coordinate_element", "load_msh",
+__all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "fix_coordinate_element", "from_dolfinx", "load_msh",
            "plate_section", "quarter_disc", "rectangle"]
 
 BODY_TAG = 1
@@ -451,3 +451,16 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
             _add_group(1, [curve], tag, name)
 
     return _build("quarter_disc", params, construct, comm, cache_dir)
+
+
+def from_dolfinx(mesh: dolfinx.mesh.Mesh, facet_tags: dolfinx.mesh.MeshTags, names: dict[str, int],
+                 cell_tags: dolfinx.mesh.MeshTags | None = None) -> MeshData:
+    """A mesh made with dolfinx, with its facet tags and a name for each tag value used."""
+    if mesh.geometry.dim != 2 or mesh.topology.dim != 2:
+        raise MeshError("the mesh must be 2D (gdim = tdim = 2)")
+    present = set(np.unique(facet_tags.values).tolist())
+    present = set().union(*mesh.comm.allgather(present))
+    missing = {k: v for k, v in names.items() if v not in present}
+    if missing:
+        raise MeshError(f"no facet carries the tag value of {missing}: tag those facets or drop the names")
+    return MeshData(mesh, cell_tags, facet_tags, dict(names), pathlib.Path("<dolfinx mesh>"))

@@ -1,114 +1,213 @@
-"""Running a scene: mesh, model, increments, XDMF, CSV history, progress bar and timing.
+"""Steps and jobs: load a body in steps, record probes, hand every converged increment to writers.
 
-Output folder (created if needed):
-``history.csv``   one row per converged increment (columns named by the scene)
-``results.xdmf``  (+ ``.h5``) fields per converged increment, time = load factor
-``run.json``      parameters, outcome, increments, Newton iterations, the timing breakdown and, for
-                  contact scenes, the load at first contact and the largest penetration
-Every file is flushed after each increment, so a run that stops part-way keeps what converged.
+    job = cm.Job(body, items, steps=[cm.Step(20), cm.Step(10, ramp={press: 0.0})],
+                 probes=[cm.NodeDisplacement("tip", (10, 0))], writers=[cm.HistoryCSV("h.csv")])
+    results = job.run()
+    results["tip_uy"]                 # the column as an array, one value per converged increment
+
+Each item carries a factor (loads.py); a :class:`Step` moves the factors over its increments:
+``ramp=None`` takes every item to 1 from where it stands, ``ramp={item: target}`` the items named
+(a number, or a callable of the step's fraction s in [0, 1] for a path of its own) while the others
+hold. The history's ``time`` runs from k - 1 to k over step k; its ``load`` is ``time`` unless the
+job maps it (``load=lambda time: ...``, e.g. a physical load level), and is the XDMF time.
+
+Data flows one way: the job compiles the model, runs the increment loop of each step
+(solver/increments.py), turns every converged increment into a history row (the probes) and gives
+it to the writers; nothing calls back into the problem. A step that cannot go on ends the job with
+its message; the results hold every increment converged before.
 """
 from __future__ import annotations
 
-import dataclasses
-import json
-import logging
-import pathlib
 import time
+from dataclasses import dataclass, field
+from typing import Callable
 
-from mpi4py import MPI
+import numpy as np
 from tqdm import tqdm
 
-from .output import History, XDMFOutput
-from .parallel import on_root
-from .scenes import Scene
-from .solver import IncrementalSolver, NewtonSettings, RunResult, StepSettings, Timer
+from .mechanics.model import Model
+from .parallel import collective
+from .solver import IncrementalSolver, Newton, NewtonSettings, RunResult, StepSettings, Timer
 
-log = logging.getLogger("comove")
-
-
-def _print(comm, text: str) -> None:
-    if comm.rank == 0:
-        tqdm.write(text)
+PREDICTORS = {"none": False, "linear": 1, "quadratic": 2, "tangent": "tangent"}
 
 
-def run_scene(scene: Scene, out_dir, comm=MPI.COMM_WORLD, progress: bool = True,
-              newton: NewtonSettings | None = None, callbacks=(),
-              steps: StepSettings | None = None) -> RunResult:
-    """Run ``scene`` and write its results into ``out_dir``; returns the solver's RunResult.
+class JobError(ValueError):
+    """A step or job that cannot run; the message names the value and the fix."""
 
-    ``newton``, ``steps``: solver settings instead of the scene's own.
-    ``callbacks``: extra ``f(scene, model, increment)`` called after each converged increment (after
-    the history row is written, before the state is committed), e.g. to take snapshots for plots.
+
+@dataclass
+class Step:
+    """A stage of the loading: ``n`` nominal increments, the factors' targets, increment control.
+
+    ``predictor``: where each increment starts, "none" (the last converged state), "linear" or
+    "quadratic" (extrapolation of the last converged states) or "tangent" (Euler step along the
+    path's tangent, docs/theory.md section 7.2). ``max_cutbacks``: halvings of a failed increment.
     """
-    out = pathlib.Path(out_dir)
-    on_root(comm, out.mkdir, parents=True, exist_ok=True)
-    timer = Timer()
-    t_start = time.perf_counter()
-    with timer("mesh"):
-        md = scene.mesh_data(comm)
-    with timer("setup and compilation"):
-        model = scene.build_model(md)
-        model.finalize()
-    contacts = scene.contacts()
-    for c in contacts:
-        c.check_start()
-    extra = []
-    for c in contacts:
-        extra.append(("contact_pressure", lambda c=c: (c.update_fields(), c.pressure)[1]))
-        if c.mu > 0:
-            extra.append(("contact_shear", lambda c=c: c.shear))
-    history = History(out / "history.csv", scene.history_columns(), comm)
-    xdmf = XDMFOutput(out / "results.xdmf", model, extra, scene.fibres(model))
-    stats = {"first_contact_load": None, "max_penetration": 0.0}
-    _print(comm, f"{scene.name}: {model.num_dofs()} dofs, {md.mesh.topology.index_map(2).size_global}"
-                 f" cells, {model.kin.model}, update {scene.update}, {scene.n_steps} increments nominal")
 
-    def record(m, inc):
-        row = {"step": inc.step, "load": inc.load * scene.load_max, **scene.history_row(m),
-               "newton_its": inc.newton_its, "wall_s": inc.wall_s}
-        history.append(**row)
-        xdmf.write(inc.load)
+    n: int = 10
+    ramp: dict | None = None
+    predictor: str = "none"
+    max_cutbacks: int = 6
+    name: str = ""
+
+    def __post_init__(self):
+        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or not 1 <= self.n <= 10**6:
+            raise JobError(f"step {self.name or ''} n = {self.n!r}: give a whole number of increments "
+                           "from 1 to 1000000")
+        if self.predictor not in PREDICTORS:
+            raise JobError(f"predictor = {self.predictor!r} is unknown: choose one of {', '.join(PREDICTORS)}")
+        if isinstance(self.max_cutbacks, bool) or not (isinstance(self.max_cutbacks, int) and
+                                                       0 <= self.max_cutbacks <= 30):
+            raise JobError(f"max_cutbacks = {self.max_cutbacks!r}: give a whole number from 0 to 30")
+
+    def settings(self) -> StepSettings:
+        return StepSettings(n_steps=int(self.n), max_cutbacks=self.max_cutbacks,
+                            predictor=PREDICTORS[self.predictor])
+
+    def start(self, items) -> None:
+        """Set every item's ramp for this step."""
+        ramp = self.ramp
+        if ramp is not None:
+            unknown = [k for k in ramp if not any(k is item for item in items)]
+            if unknown:
+                raise JobError(f"step {self.name!r} ramps {unknown[0]!r}, which is not an item of the job")
+        for item in items:
+            if ramp is None:
+                item.ramp(1.0)
+            elif any(item is k for k in ramp):
+                item.ramp(next(v for k, v in ramp.items() if k is item))
+            else:
+                item.hold()
+
+
+@dataclass
+class Results:
+    """A job's outcome: the history as columns, the increments, Newton statistics and timing."""
+
+    columns: list[str]
+    rows: list[dict] = field(default_factory=list)
+    increments: list = field(default_factory=list)
+    completed: bool = False
+    message: str = ""
+    wall_s: float = 0.0
+    dofs: int = 0
+    timing: dict = field(default_factory=dict)
+    timing_report: str = ""
+    contact: dict = field(default_factory=dict)
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        if column not in self.columns:
+            raise KeyError(f"no column {column!r}; the columns are {', '.join(self.columns)}")
+        return np.array([row[column] for row in self.rows])
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    @property
+    def newton_its(self) -> list[int]:
+        return [inc.newton_its for inc in self.increments]
+
+    @property
+    def failed_its(self) -> int:
+        return sum(inc.failed_its for inc in self.increments)
+
+    @property
+    def last(self) -> dict:
+        return self.rows[-1] if self.rows else {}
+
+
+@dataclass
+class Run:
+    """What writers see: the job, its compiled model and the history's columns."""
+
+    job: "Job"
+    model: Model
+    columns: list[str]
+
+    @property
+    def comm(self):
+        return self.model.comm
+
+
+class Job:
+    """A body, its items, the steps, the probes and the writers (see the module docstring)."""
+
+    def __init__(self, body, items=(), steps=(), probes=(), writers=(), newton: NewtonSettings | None = None,
+                 load: Callable[[float], float] | None = None, jit_options: dict | None = None):
+        self.body, self.items = body, list(items)
+        self.steps = list(steps) or [Step()]
+        self.probes, self.writers = list(probes), list(writers)
+        self.newton, self.load, self.jit_options = newton or NewtonSettings(), load, jit_options
+        for s in self.steps:
+            if not isinstance(s, Step):
+                raise JobError(f"steps: {s!r} is not a Step")
+        columns = ["step", "time", "load"] + [c for p in self.probes for c in p.columns]
+        if len(set(columns)) != len(columns):
+            dup = sorted({c for c in columns if columns.count(c) > 1})
+            raise JobError(f"the history would have the column(s) {dup} twice: rename a probe")
+        self.columns = columns + ["newton_its", "wall_s"]
+
+    def run(self, progress: bool = False) -> Results:
+        """Compile, run every step, write; returns the :class:`Results` (also when a step fails)."""
+        t_start = time.perf_counter()
+        timer = Timer()
+        with timer("setup and compilation"):
+            model = Model(self.body, self.items)
+            model.finalize(self.jit_options)
+        self.model = model
+        comm = model.comm
+        contacts = [item for item in self.items if item.kind == "contact"]
         for c in contacts:
-            z = c.zone()
-            stats["max_penetration"] = max(stats["max_penetration"], z.max_penetration)
-            if z.in_contact and stats["first_contact_load"] is None:
-                stats["first_contact_load"] = row["load"]
-        extra = ", ".join(f"{k} {row[k]:.5g}" for k in scene.columns)
-        cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
-        for cb in callbacks:
-            cb(scene, m, inc)
-        _print(comm, f"  step {inc.step:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
-                     f"{extra}  ({inc.wall_s:.2f} s)")
+            c.check_start()
+        for p in self.probes:
+            p.attach(model)
+        run = Run(self, model, self.columns)
+        res = Results(list(self.columns), dofs=model.num_dofs())
+        stats = {"first_contact_load": None, "max_penetration": 0.0}
+        with timer("output"):
+            for w in self.writers:
+                collective(comm, w.open, run)
+        newton = Newton(model, self.newton, timer)
+        bar = tqdm(total=len(self.steps), unit="step", disable=not progress or comm.rank != 0,
+                   bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
+        try:
+            for k, step in enumerate(self.steps):
+                step.start(self.items)
+                solver = IncrementalSolver(model, step.settings(), newton)
+                rr, last = RunResult(), 0.0
+                for inc in solver.increments(rr):
+                    t = k + inc.load
+                    row = {"step": len(res.rows) + 1, "time": t,
+                           "load": self.load(t) if self.load is not None else t}
+                    with timer("output"):
+                        for p in self.probes:
+                            row.update(collective(comm, p, model))
+                        row.update(newton_its=inc.newton_its, wall_s=inc.wall_s)
+                        for c in contacts:
+                            z = c.zone()
+                            stats["max_penetration"] = max(stats["max_penetration"], z.max_penetration)
+                            if z.in_contact and stats["first_contact_load"] is None:
+                                stats["first_contact_load"] = row["load"]
+                        res.rows.append(row)
+                        res.increments.append(inc)
+                        for w in self.writers:
+                            collective(comm, w.write, run, row, inc)
+                    bar.update(inc.load - last)
+                    last = inc.load
+                if not rr.completed:
+                    name = f" {step.name!r}" if step.name else ""
+                    res.message = f"step {k + 1}{name}: {rr.message}" if len(self.steps) > 1 else rr.message
+                    break
+            else:
+                res.completed = True
+                res.message = f"completed {len(res.rows)} increments"
+        finally:
+            bar.close()
+            res.wall_s = time.perf_counter() - t_start
+            res.timing, res.timing_report = dict(timer.totals), timer.report()
+            res.contact = stats if contacts else {}
+            for w in self.writers:
+                collective(comm, w.close, run, res)
+        return res
 
-    solver = IncrementalSolver(model, steps or scene.step_settings(),
-                               newton or scene.newton_settings(), timer)
-    bar = tqdm(total=1.0, unit="load", disable=not progress or comm.rank != 0,
-               bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
-    try:
-        result = solver.run([record], progress=bar)
-    finally:
-        bar.close()
-        history.close()
-        xdmf.close()
-    wall = time.perf_counter() - t_start
-    its = result.newton_its
-    _print(comm, f"{scene.name}: {result.message}; Newton iterations mean "
-                 f"{(sum(its) / len(its)) if its else 0:.2f}, max {max(its) if its else 0}; "
-                 f"wall {wall:.2f} s")
-    _print(comm, timer.report())
-    if contacts:
-        if stats["first_contact_load"] is None:
-            _print(comm, f"warning: the obstacle never touched the body up to load "
-                         f"{(result.increments[-1].load if result.increments else 0) * scene.load_max:.5g}"
-                         "; check the gap and the load")
-        else:
-            _print(comm, f"first contact at load {stats['first_contact_load']:.5g}; largest "
-                         f"penetration {stats['max_penetration']:.3g}")
-    info = {"scene": scene.name, "parameters": dataclasses.asdict(scene),
-            "completed": result.completed, "message": result.message,
-            "increments": len(its), "newton_its": its,
-            "failed_its": sum(i.failed_its for i in result.increments),
-            "dofs": model.num_dofs(), "ranks": comm.size, "wall_s": wall,
-            "timing": dict(timer.totals), **(stats if contacts else {})}
-    on_root(comm, (out / "run.json").write_text, json.dumps(info, indent=1))
-    return result

@@ -1,19 +1,21 @@
-"""Pictures for the demos: snapshots of the deformed body gathered on rank 0, drawn with matplotlib.
+"""Pictures: snapshots of the deformed body gathered on rank 0, drawn with matplotlib.
 
 A :class:`Snapshot` holds the deformed positions of the mesh vertices (x + u), the triangles of the
-(first-order view of the) mesh and one value per cell (von Mises stress, or the equivalent plastic
-strain of elastic-plastic bodies), gathered from every rank onto rank 0; other ranks hold ``None``.
+(first-order view of the) mesh and a smooth vertex field (von Mises stress, or the equivalent plastic
+strain of elastic-plastic bodies: the cell averages of the quadrature data averaged at each vertex
+over its cells, drawn with Gouraud shading rather than as a checkerboard of cells), gathered from
+every rank onto rank 0; other ranks hold ``None``. :class:`Snapshots` is a job writer.
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 
 import numpy as np
 from dolfinx import fem
 
-from . import compat
-from .materials import von_mises
+from .. import compat
+from ..mechanics.material_data import von_mises
+from .writers import Writer
 
 
 @dataclass
@@ -21,32 +23,32 @@ class Snapshot:
     load: float                     # physical load level (history's ``load``)
     xy: np.ndarray                  # (vertices, 2) deformed positions
     triangles: np.ndarray           # (cells, 3) vertex numbers
-    values: np.ndarray              # (cells,) cell values
+    values: np.ndarray              # (vertices,) vertex values
     label: str                      # what ``values`` are
 
 
-class Snapshots:
-    """A run_scene callback that keeps the deformed body at chosen load levels.
+class Snapshots(Writer):
+    """A writer that keeps the deformed body at chosen load levels (the history's ``load``).
 
     ``levels`` are physical load levels; the first converged increment at or beyond each is kept
     (so a run with few increments keeps fewer pictures). ``field`` is "von_mises" or
     "plastic_strain".
     """
 
-    def __init__(self, levels, field: str = "von_mises"):
-        self.levels = sorted(levels)
+    def __init__(self, levels, field: str = "von_mises", column: str = "load"):
+        self.levels, self.column = sorted(levels), column
         self.field = field
         self.taken: list[Snapshot] = []
         self._next = 0
         self._V1 = None
 
-    def __call__(self, scene, model, inc) -> None:
-        load = inc.load * scene.load_max
+    def write(self, run, row, inc) -> None:
+        model, load = run.model, row[self.column]
         if self._next >= len(self.levels) or load < self.levels[self._next] - 1e-12:
             return
         while self._next < len(self.levels) and load >= self.levels[self._next] - 1e-12:
             self._next += 1
-        snap = self.take(model, load)
+        snap = self.take(model, row["load"])
         if snap is not None:
             self.taken.append(snap)
 
@@ -81,26 +83,20 @@ class Snapshots:
             XY[g] = p
         T = np.concatenate([t for _, _, t, _ in parts])
         Vals = np.concatenate([v for _, _, _, v in parts])
-        return Snapshot(load, XY, T, Vals, label)
-
-
-def read_history(path, origin: bool = False) -> dict[str, np.ndarray]:
-    """Columns of a history.csv as arrays; with ``origin`` led by the unloaded state (a row of zeros:
-    no load, displacement, force or contact), so that curves start where the body did."""
-    with open(path) as fh:
-        rows = list(csv.DictReader(fh))
-    lead = [0.0] if origin else []
-    return {k: np.array(lead + [float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
+        # vertex values: the mean of the cell values around each vertex
+        acc, cnt = np.zeros(n), np.zeros(n)
+        np.add.at(acc, T.ravel(), np.repeat(Vals, 3))
+        np.add.at(cnt, T.ravel(), 1.0)
+        return Snapshot(load, XY, T, acc / np.maximum(cnt, 1.0), label)
 
 
 def draw(ax, snap: Snapshot, vmin=None, vmax=None, mirror: bool = False, cmap: str = "viridis"):
-    """The deformed body coloured by its cell values (and its mirror image in x = 0 if asked)."""
+    """The deformed body coloured by its vertex field (and its mirror image in x = 0 if asked)."""
     import matplotlib.tri as mtri
     art = None
     for sign in ((1.0, -1.0) if mirror else (1.0,)):
         tri = mtri.Triangulation(sign * snap.xy[:, 0], snap.xy[:, 1], snap.triangles)
-        art = ax.tripcolor(tri, facecolors=snap.values, vmin=vmin, vmax=vmax, cmap=cmap,
-                           edgecolors="none")
+        art = ax.tripcolor(tri, snap.values, vmin=vmin, vmax=vmax, cmap=cmap, shading="gouraud")
     ax.set_aspect("equal")
     return art
 
@@ -114,23 +110,38 @@ def draw_plane(ax, y: float, x0: float, x1: float, below: bool = True) -> None:
 
 
 def snapshot_grid(snaps: list[Snapshot], obstacle, path, title: str, mirror: bool = False,
-                  xlabel: str = "x [cm]", ylabel: str = "y [cm]", load_name: str = "load") -> None:
-    """One panel per snapshot, shared colour scale; ``obstacle(ax, snap)`` draws the obstacle."""
+                  xlabel: str = "x [cm]", ylabel: str = "y [cm]", load_name: str = "load",
+                  columns: int = 1, clip: float | None = None) -> None:
+    """Panels of equal size (``columns`` per row), one per snapshot, one colour scale shared by all;
+    ``obstacle(ax, snap)`` draws the obstacle. ``clip``: the scale's top at this percentile of the
+    values (a corner singularity would otherwise saturate it; the colour bar shows the overflow)."""
     import matplotlib.pyplot as plt
     if not snaps:
         return
-    vmin = min(float(s.values.min()) for s in snaps)
-    vmax = max(float(s.values.max()) for s in snaps)
+    vals = np.concatenate([s.values for s in snaps])
+    vmin = float(vals.min())
+    vmax = float(np.percentile(vals, clip)) if clip else float(vals.max())
     n = len(snaps)
-    fig, axes = plt.subplots(n, 1, figsize=(8, 1.0 + 2.2 * n), squeeze=False, layout="constrained")
+    rows = -(-n // columns)
+    x = np.concatenate([s.xy[:, 0] for s in snaps])
+    y = np.concatenate([s.xy[:, 1] for s in snaps])
+    aspect = (np.ptp(y) + 1e-12) / (np.ptp(x) * (2 if mirror else 1) + 1e-12)
+    width = 8.0 if columns == 1 else 4.5 * columns
+    fig, axes = plt.subplots(rows, columns, figsize=(width, 1.2 + rows * min(max(aspect, 0.25), 1.2) * 4.2),
+                             squeeze=False, sharex=True, sharey=True, layout="constrained")
     art = None
-    for ax, s in zip(axes[:, 0], snaps):
+    for ax, s in zip(axes.ravel(), snaps):
         art = draw(ax, s, vmin, vmax, mirror)
         obstacle(ax, s)
         ax.set_title(f"{load_name} = {s.load:.4g}", fontsize=9)
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
         ax.set_ylabel(ylabel)
-    axes[-1, 0].set_xlabel(xlabel)
+    for ax in axes[-1, :]:
+        ax.set_xlabel(xlabel)
     fig.suptitle(title)
-    fig.colorbar(art, ax=axes[:, 0].tolist(), label=snaps[0].label, shrink=0.8)
+    fig.colorbar(art, ax=axes.ravel().tolist(), label=snaps[0].label, shrink=0.8,
+                 extend="max" if clip and vmax < vals.max() else "neither")
     fig.savefig(path, dpi=130)
     plt.close(fig)

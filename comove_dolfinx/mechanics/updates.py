@@ -39,7 +39,7 @@ from .kinematics import (
     to_tensor,
     to_vec,
 )
-from .materials import Elastic
+from .material_data import Elastic
 
 
 @dataclass

@@ -12,7 +12,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from . import compat
+from .. import compat
 
 _CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral}
 

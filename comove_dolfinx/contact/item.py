@@ -1,0 +1,295 @@
+"""The contact item: a tagged boundary against a rigid obstacle, penalty or Nitsche, lagged Coulomb.
+
+Its factor drives the obstacle's motion (obstacles.py); its terms come from the pure functions of
+laws.py with the obstacle's gap and normal at the current position x = X + u and, for Nitsche, the
+model's facet traction (docs/theory.md section 6). Friction uses the pressure of a lag state, the body
+at u_lag against the obstacle where it stood then: the converged state of the last increment
+(Shang and Chen's scheme), or with ``relag`` the state of the last pass within the increment, repeated
+until the pressure settles (true Coulomb). The lag state depends on converged data only. The penalty
+friction keeps its stick part e_n as a boundary field (a lumped projection at each converged
+increment); Nitsche's lives in the stress.
+
+Results: the force from the residual (F . e = -R_c(u; e) for the constant fields e_x, e_y), the extent
+(current length of the boundary where the pressure is positive, at the facet quadrature points), the
+largest nodal penetration, the lengths that stick and slip, and nodal fields of pressure and shear.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .. import compat
+from ..loads import Item
+from . import laws
+from .obstacles import ContactError, Obstacle
+
+FACET_DEGREE = 7          # 4 Gauss points per facet
+
+
+@dataclass
+class ZoneInfo:
+    """The contact set in the current configuration."""
+
+    extent: float              # length in contact along the boundary (current configuration)
+    max_penetration: float     # largest -g over the nodes of the contact boundary (0 if none)
+
+    @property
+    def in_contact(self) -> bool:
+        return self.extent > 0.0
+
+
+class Contact(Item):
+    """Contact of the tagged boundary ``boundary`` with ``obstacle``.
+
+    Parameters
+    ----------
+    method : "penalty" or "nitsche"
+    gamma0 : float
+        Dimensionless weight: gamma = gamma0 E / h, h the cell diameter.
+    theta : 1, 0 or -1
+        Nitsche's variant (symmetric, incomplete, skew-symmetric).
+    mu : float
+        Coulomb friction coefficient (0: frictionless).
+    relag : bool
+        True Coulomb: re-solve each increment with the threshold of its own solution until the
+        pressure changes by less than ``relag_tol`` (at most ``max_passes`` passes).
+    """
+
+    kind = "contact"
+
+    def __init__(self, boundary: str, obstacle: Obstacle, method: str = "penalty",
+                 gamma0: float = 100.0, theta: int = 0, mu: float = 0.0, relag: bool = False,
+                 max_passes: int = 10, relag_tol: float = 1e-4):
+        super().__init__(boundary)
+        if method not in laws.METHODS:
+            raise ContactError(f"contact method {method!r} is unknown: choose penalty or nitsche")
+        if not (np.isfinite(gamma0) and gamma0 > 0):
+            raise ContactError(f"gamma0 = {gamma0} must be a finite number > 0")
+        if theta not in (1, 0, -1):
+            raise ContactError(f"theta = {theta}: Nitsche's variant is 1, 0 or -1")
+        if not (np.isfinite(mu) and mu >= 0):
+            raise ContactError(f"mu = {mu}: the friction coefficient must be a finite number >= 0")
+        if not isinstance(obstacle, Obstacle):
+            raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile")
+        self.boundary, self.obstacle, self.method = boundary, obstacle, method
+        self.gamma0, self.theta, self.mu = gamma0, theta, mu
+        self.relag, self.max_passes, self.relag_tol = relag, max_passes, relag_tol
+        self.factor_n = 0.0
+
+    # -- the item protocol ------------------------------------------------------------------------
+    def attach(self, ctx):
+        """The contact terms of the residual (UFL, linear in the test function)."""
+        msh = ctx.mesh
+        self.comm, self.u, self._u_n = msh.comm, ctx.u, ctx.u_n
+        self.obstacle.bind(msh)
+        self.obstacle.set(self.factor)
+        self._d_n = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))     # obstacle at the last increment
+        self._d_lag = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))   # obstacle in the lag state
+        self._d_n.value = self._d_lag.value = self.obstacle.displacement(self.factor_n)
+        tdim = msh.topology.dim
+        DG0 = compat.function_space(msh, "DG", 0)
+        self.h = fem.Function(DG0, name="cell_size")
+        ncell = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
+        cells = np.arange(ncell, dtype=np.int32)
+        self.h.x.array[compat.cell_dofs(DG0, ncell)[:, 0]] = compat.cell_sizes(msh, cells)
+        self.u_lag = fem.Function(ctx.V, name="u_lag")
+        self.u_lag.x.array[:] = ctx.u_n.x.array
+        # a Constant, so that models differing only in gamma0 share the compiled forms
+        self._gamma0E = fem.Constant(msh, PETSc.ScalarType(self.gamma0 * ctx.E))
+        gamma = self._gamma0E / self.h
+        u, v, u_n = ctx.u, ctx.v, ctx.u_n
+        x = ctx.x + u
+        obs = self.obstacle
+        g, n_o = obs.gap(x), obs.normal(x)
+        t_o = ufl.as_vector([-n_o[1], n_o[0]])
+        self.ds_c = ctx.ds(self.boundary, {"quadrature_degree": FACET_DEGREE})
+        th = self.theta
+        N = ufl.FacetNormal(msh)
+        if self.method == "penalty":
+            R, p = laws.penalty_normal(g, n_o, v, gamma)
+        else:
+            PN = ctx.facet_traction(N)
+            p_u = ufl.dot(n_o, PN)
+            R, p = laws.nitsche_normal(g, n_o, v, gamma, th, p_u, ufl.derivative(p_u, u, v))
+        self.p_ref = p                                           # pressure per reference area
+        self.q_ref = None
+        if self.mu > 0:
+            # the lag state: the body at u_lag against the obstacle where it stood then (d_lag)
+            x_lag, d_lag = ctx.x + self.u_lag, self._d_lag
+            g_lag = obs.gap(x_lag, d_lag)
+            if self.method == "penalty":
+                p_lag = gamma * laws.positive_part(-g_lag)
+            else:
+                p_lag = laws.positive_part(ufl.dot(obs.normal(x_lag, d_lag), ctx.facet_traction(N, self.u_lag))
+                                           - gamma * g_lag)
+            s = self.mu * p_lag
+            slip = ufl.dot(t_o, (u - u_n) - (obs._d - self._d_n))
+            if self.method == "penalty":
+                self.e_n = fem.Function(compat.function_space(msh, "Lagrange", ctx.degree), name="stick_slip")
+                Rt, self.q_ref, trial, self._e_new = laws.penalty_friction(slip, self.e_n, s, t_o, v, gamma)
+            else:
+                q_u = ufl.dot(t_o, PN)
+                Rt, self.q_ref, trial = laws.nitsche_friction(slip, s, t_o, v, gamma, th, q_u,
+                                                              ufl.derivative(q_u, u, v))
+            R = R + Rt
+            self._p_lag = p_lag
+            self._slipping = ufl.gt(abs(trial), s)       # where the friction law slips
+        self.R_c = R * ctx.weight * self.ds_c
+        self._build_outputs(ctx)
+        return self.R_c
+
+    def _apply(self, factor):
+        self.obstacle.set(factor)
+
+    def commit(self) -> None:
+        """Before the model's own state moves to the new increment (u_n still the old one)."""
+        if self.mu > 0 and self.method == "penalty":
+            vals = self._assemble_vec(self._form("e"))
+            m, b = self._lumped, self._sdofs      # the boundary's nodes (elsewhere m is round-off)
+            self.e_n.x.array[b] = vals[b] / m[b]
+            self.e_n.x.scatter_forward()
+        self.factor_n = self.factor
+        self._d_n.value = self.obstacle.displacement(self.factor)
+        self._d_lag.value = self._d_n.value
+        self.u_lag.x.array[:] = self.u.x.array
+
+    def restore(self) -> None:
+        self.u_lag.x.array[:] = self._u_n.x.array
+        self._d_lag.value = self._d_n.value
+
+    def relag_pass(self) -> bool:
+        """True Coulomb: take the threshold from the current solution; True if it changed notably."""
+        if not (self.relag and self.mu > 0):
+            return False
+        p_old = self._assemble_vec(self._form("p_lag"))
+        self.u_lag.x.array[:] = self.u.x.array
+        self._d_lag.value = self.obstacle.displacement(self.factor)
+        p_new = self._assemble_vec(self._form("p_lag"))
+        scale = max(np.abs(p_new).max(), 1e-300)
+        change = self.comm.allreduce(float(np.abs(p_new - p_old).max()) / scale, op=MPI.MAX)
+        return change > self.relag_tol
+
+    # -- results ------------------------------------------------------------------------------------
+    def _build_outputs(self, ctx):
+        """The forms of the results (compiled on first use: a run that never asks for one does not
+        pay its compilation)."""
+        msh = ctx.mesh
+        self._e = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))
+        S = compat.function_space(msh, "Lagrange", ctx.degree)
+        phi = ufl.TestFunction(S)
+        F = ctx.update.F(ctx.u)
+        N = ufl.FacetNormal(msh)
+        N3 = ufl.as_vector([N[0], N[1], 0.0])
+        stretch = ufl.sqrt(ufl.dot(ufl.det(F) * ufl.inv(F).T * N3, ufl.det(F) * ufl.inv(F).T * N3))
+        # current length of the contact set: in-plane stretch of the boundary where p > 0
+        F2 = ufl.Identity(2) + ufl.grad(ctx.u)
+        T = ufl.as_vector([-N[1], N[0]])
+        chi = ufl.conditional(ufl.gt(self.p_ref, 0.0), 1.0, 0.0)
+        dsc = self.ds_c
+        self._ufl = {"force": -ufl.replace(self.R_c, {ctx.v: self._e}), "mass": phi * dsc,
+                     "extent": chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * dsc,
+                     "p": self.p_ref / stretch * phi * dsc}
+        if self.mu > 0:
+            # reference length of the contact set that slips (friction at its threshold) and sticks
+            slipping = ufl.conditional(self._slipping, 1.0, 0.0)
+            self._ufl.update(slip=chi * slipping * dsc, stick=chi * (1.0 - slipping) * dsc,
+                             q=self.q_ref / stretch * phi * dsc, p_lag=self._p_lag * phi * dsc)
+            if self.method == "penalty":
+                self._ufl["e"] = self._e_new * phi * dsc
+        self._compiled = {}
+        self.pressure = fem.Function(S, name="contact_pressure")
+        self.shear = fem.Function(S, name="contact_shear")
+        self._vec = compat.create_vector(self._form("mass"))
+        self._lumped = self._assemble_vec(self._form("mass"))
+        # nodes of the contact boundary (owned), for the contact zone
+        fdim = msh.topology.dim - 1
+        facets = ctx.facets(self.boundary)
+        dofs = fem.locate_dofs_topological(ctx.V.sub(0), fdim, facets)   # unrolled indices of V
+        nodes = np.unique(dofs // ctx.V.dofmap.index_map_bs)
+        self._nodes = nodes[nodes < ctx.V.dofmap.index_map.size_local]   # owned nodes only
+        self._X = ctx.V.tabulate_dof_coordinates()[self._nodes, :2]
+        sdofs = fem.locate_dofs_topological(S, fdim, facets)
+        self._sdofs = sdofs[sdofs < S.dofmap.index_map.size_local]
+        # the boundary field's dof at each of the boundary's nodes (same points, matched by position)
+        XS = S.tabulate_dof_coordinates()[:, :2]
+        key = {tuple(np.round(x, 12)): i for i, x in enumerate(XS)}
+        self._node_sdof = np.array([key.get(tuple(np.round(x, 12)), -1) for x in self._X], dtype=np.int64)
+
+    def _form(self, name: str):
+        """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
+        if name not in self._compiled:
+            self._compiled[name] = fem.form(self._ufl[name])
+        return self._compiled[name]
+
+    def _assemble_vec(self, form) -> np.ndarray:
+        """Owned entries of an assembled linear form on the boundary field space."""
+        compat.assemble_vector(self._vec, form)
+        return self._vec.array.copy()
+
+    def check_start(self) -> None:
+        """ContactError if the body already penetrates the obstacle in its initial state."""
+        g = self.obstacle.gap_np(self._X, self.obstacle.displacement(self.factor))
+        gmin = self.comm.allreduce(float(g.min()) if g.size else np.inf, op=MPI.MIN)
+        scale = self.comm.allreduce(float(np.ptp(self._X)) if g.size else 0.0, op=MPI.MAX)
+        if gmin < -1e-9 * max(scale, 1.0):
+            raise ContactError(f"boundary {self.boundary!r} starts inside the obstacle (gap {gmin:.3g} "
+                               "< 0): move the obstacle away from the body")
+
+    def force(self) -> np.ndarray:
+        """Total force of the obstacle on the body (x, y), from the residual's contact term."""
+        out = np.zeros(2)
+        for i in range(2):
+            self._e.value = np.eye(2)[i]
+            out[i] = self.comm.allreduce(fem.assemble_scalar(self._form("force")), op=MPI.SUM)
+        return out
+
+    def update_fields(self) -> None:
+        """Contact pressure and tangential traction (per current area) as boundary fields."""
+        m, b = self._lumped, self._sdofs
+        for name, f in (("p", self.pressure), ("q", self.shear)):
+            if name not in self._ufl:
+                continue
+            vals = self._assemble_vec(self._form(name))
+            f.x.array[:] = 0.0
+            f.x.array[b] = vals[b] / m[b]
+            f.x.scatter_forward()
+
+    def boundary_values(self, f) -> tuple[np.ndarray, np.ndarray]:
+        """(reference coordinates, values) of a scalar output field (e.g. ``pressure``) at every node
+        of the contact boundary, gathered on all ranks."""
+        X = f.function_space.tabulate_dof_coordinates()[self._sdofs, :2]
+        return (np.concatenate(self.comm.allgather(X)),
+                np.concatenate(self.comm.allgather(f.x.array[self._sdofs])))
+
+    def stick_slip(self) -> tuple[float, float]:
+        """Reference lengths of the contact set where friction sticks and where it slips (zeros
+        without friction), at the current iterate."""
+        if "slip" not in self._ufl:
+            return 0.0, 0.0
+        return tuple(self.comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM)
+                     for f in (self._form("stick"), self._form("slip")))
+
+    def zone_edges(self, axis: int = 0) -> tuple[float, float]:
+        """Smallest and largest current coordinate ``axis`` of the boundary's nodes that carry
+        contact pressure (NaN, NaN without contact): where the contact set begins and ends."""
+        self.update_fields()
+        ok = self._node_sdof >= 0
+        p = np.zeros(len(self._nodes))
+        p[ok] = self.pressure.x.array[self._node_sdof[ok]]
+        x = (self._X + self.u.x.array.reshape(-1, 2)[self._nodes])[p > 0, axis]
+        lo = self.comm.allreduce(float(x.min()) if x.size else np.inf, op=MPI.MIN)
+        hi = self.comm.allreduce(float(x.max()) if x.size else -np.inf, op=MPI.MAX)
+        return (lo, hi) if np.isfinite(lo) else (np.nan, np.nan)
+
+    def zone(self) -> ZoneInfo:
+        """Contact extent (from the facet quadrature points) and the largest nodal penetration."""
+        extent = self.comm.allreduce(fem.assemble_scalar(self._form("extent")), op=MPI.SUM)
+        x = self._X + self.u.x.array.reshape(-1, 2)[self._nodes]
+        g = self.obstacle.gap_np(x, self.obstacle.displacement(self.factor))
+        pen = self.comm.allreduce(float(max(-g.min(), 0.0)) if g.size else 0.0, op=MPI.MAX)
+        return ZoneInfo(float(extent), pen)

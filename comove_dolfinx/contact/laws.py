@@ -1,0 +1,65 @@
+"""The contact laws as pure UFL functions of their arguments (docs/theory.md sections 6.2-6.4).
+
+Tractions on the body are per unit reference area (per unit reference thickness in plane stress):
+contact traction = p n_o + q t_o, pressure p >= 0, t_o = (-n_o[1], n_o[0]).
+
+* Penalty:  p = gamma [-g]_+.
+* Nitsche (theta = 1, 0, -1), with the nominal normal traction p(u) = n_o . (P N) of the current stress:
+      R_n = -(theta/gamma) p(u) p'(u; v) + (1/gamma) [p(u) - gamma g]_+ (theta p'(u; v) - gamma n_o.v),
+  which is the exact traction term -p n_o.v whenever p = [p - gamma g]_+.
+* Coulomb friction with a given slip threshold s (mu times a lagged pressure) and slip increment ds:
+      penalty:  q = -P_s(gamma (e_n + ds)), with e_n the elastic (stick) part carried over;
+      Nitsche:  q = P_s(q(u) - gamma ds), q(u) = t_o . (P N), and the theta-terms as for the normal part;
+  P_s(x) = x for |x| <= s, s sign(x) otherwise.
+Each function returns the residual integrand (linear in the test function v) with what the outputs
+need; none keeps state, so each can be differentiated and Taylor-tested alone.
+"""
+from __future__ import annotations
+
+import ufl
+
+METHODS = ("penalty", "nitsche")
+
+
+def positive_part(x):
+    """[x]_+, active at x = 0: a body that just touches gets contact stiffness at once."""
+    return ufl.conditional(ufl.ge(x, 0.0), x, 0.0)
+
+
+def clip(x, s):
+    """P_s(x), the projection onto [-s, s]; |x| = s counts as stick, so with s = 0 (no pressure yet) a
+    zero slip keeps the stick stiffness instead of a singular tangent."""
+    return ufl.conditional(ufl.le(abs(x), s), x, s * ufl.sign(x))
+
+
+def penalty_normal(g, n_o, v, gamma):
+    """(residual integrand, pressure) of the penalty law."""
+    p = gamma * positive_part(-g)
+    return -p * ufl.dot(n_o, v), p
+
+
+def nitsche_normal(g, n_o, v, gamma, theta, p_u, dp):
+    """(residual integrand, pressure) of Nitsche's method; p_u the nominal normal traction of the
+    current stress, dp its derivative in the direction v."""
+    p = positive_part(p_u - gamma * g)
+    R = p / gamma * (theta * dp - gamma * ufl.dot(n_o, v))
+    if theta:
+        R = -theta / gamma * p_u * dp + R
+    return R, p
+
+
+def penalty_friction(slip, e_n, s, t_o, v, gamma):
+    """(residual integrand, tangential traction, trial value, new stick part) of penalty friction."""
+    trial = gamma * (e_n + slip)
+    q_tr = clip(trial, s)
+    return q_tr * ufl.dot(t_o, v), -q_tr, trial, q_tr / gamma
+
+
+def nitsche_friction(slip, s, t_o, v, gamma, theta, q_u, dq):
+    """(residual integrand, tangential traction, trial value) of Nitsche's friction term."""
+    trial = q_u - gamma * slip
+    q = clip(trial, s)
+    R = q / gamma * (theta * dq - gamma * ufl.dot(t_o, v))
+    if theta:
+        R = -theta / gamma * q_u * dq + R
+    return R, q, trial

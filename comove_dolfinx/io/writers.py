@@ -1,0 +1,125 @@
+"""The history as CSV, the run's summary as JSON, and the console's lines."""
+from __future__ import annotations
+
+import csv
+import json
+import pathlib
+
+import numpy as np
+from tqdm import tqdm
+
+from ..parallel import on_root
+
+
+class Writer:
+    """Base class: every hook optional."""
+
+    def open(self, run) -> None:
+        pass
+
+    def write(self, run, row: dict, increment) -> None:
+        pass
+
+    def close(self, run, results) -> None:
+        pass
+
+
+def _fmt(v) -> str:
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return f"{float(v):.10g}"
+
+
+class HistoryCSV(Writer):
+    """``path``: one row per converged increment (the job's columns, 10 significant digits), written
+    by rank 0 and flushed at once."""
+
+    def __init__(self, path):
+        self.path = pathlib.Path(path)
+        self._fh = None
+
+    def _open(self, columns) -> None:
+        self._fh = open(self.path, "w", newline="")
+        self._csv = csv.writer(self._fh)
+        self._csv.writerow(columns)
+        self._fh.flush()
+
+    def _write(self, values) -> None:
+        self._csv.writerow([_fmt(v) for v in values])
+        self._fh.flush()
+
+    def open(self, run) -> None:
+        self.columns = run.columns
+        on_root(run.comm, self._open, self.columns)
+
+    def write(self, run, row, increment) -> None:
+        on_root(run.comm, self._write, [row[c] for c in self.columns])
+
+    def close(self, run, results) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
+
+def read_history(path, origin: bool = False) -> dict[str, np.ndarray]:
+    """A history CSV as columns; with ``origin`` led by the unloaded state (a row of zeros: no load,
+    displacement, force or contact), so that curves start where the body did."""
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    lead = [0.0] if origin else []
+    return {k: np.array(lead + [float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
+
+
+class RunInfo(Writer):
+    """``path`` (JSON): the job's parameters, outcome, increments, Newton iterations, timing and,
+    with contact, the load at first contact and the largest penetration."""
+
+    def __init__(self, path, parameters: dict | None = None):
+        self.path, self.parameters = pathlib.Path(path), parameters or {}
+
+    def close(self, run, results) -> None:
+        info = {"parameters": self.parameters, "completed": results.completed,
+                "message": results.message, "increments": len(results.increments),
+                "newton_its": results.newton_its, "failed_its": results.failed_its,
+                "dofs": results.dofs, "ranks": run.comm.size, "wall_s": results.wall_s,
+                "timing": results.timing, **results.contact}
+        on_root(run.comm, self.path.write_text, json.dumps(info, indent=1))
+
+
+class Console(Writer):
+    """One line per increment (load, Newton iterations, the named columns) and a summary."""
+
+    def __init__(self, title: str = "", columns=()):
+        self.title, self.columns = title, tuple(columns)
+
+    def _print(self, run, text: str) -> None:
+        if run.comm.rank == 0:
+            tqdm.write(text)
+
+    def open(self, run) -> None:
+        m = run.model
+        ncells = m.mesh.topology.index_map(m.mesh.topology.dim).size_global
+        self._print(run, f"{self.title}: {m.num_dofs()} dofs, {ncells} cells, {m.kin.model}, "
+                         f"update {m.body.update}, {sum(s.n for s in run.job.steps)} increments nominal")
+
+    def write(self, run, row, inc) -> None:
+        extra = ", ".join(f"{k} {row[k]:.5g}" for k in self.columns)
+        cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
+        self._print(run, f"  step {row['step']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
+                         f"{extra}  ({inc.wall_s:.2f} s)")
+
+    def close(self, run, results) -> None:
+        its = results.newton_its
+        self._print(run, f"{self.title}: {results.message}; Newton iterations mean "
+                         f"{(sum(its) / len(its)) if its else 0:.2f}, max {max(its) if its else 0}; "
+                         f"wall {results.wall_s:.2f} s")
+        self._print(run, results.timing_report)
+        c = results.contact
+        if c:
+            if c["first_contact_load"] is None:
+                last = results.rows[-1]["load"] if results.rows else 0.0
+                self._print(run, f"warning: the obstacle never touched the body up to load {last:.5g}; "
+                                 "check the gap and the load")
+            else:
+                self._print(run, f"first contact at load {c['first_contact_load']:.5g}; largest "
+                                 f"penetration {c['max_penetration']:.3g}")

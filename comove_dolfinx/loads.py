@@ -1,0 +1,228 @@
+"""Items that load or support a body: prescribed displacements, pressures, tractions, body forces.
+
+Every item follows one protocol (contact items too, contact/item.py):
+
+* ``attach(ctx)``: build its UFL residual term (or None) and its Dirichlet conditions from the
+  model's :class:`mechanics.model.Context`; called once, when the model is compiled;
+* ``set(t)``: the state at load factor t of the current step (amplitudes are Constants, so nothing
+  is recompiled);
+* ``commit()`` / ``restore()``: at a converged / failed increment (history-dependent items);
+* ``bcs``: its Dirichlet conditions; ``nodal(t)``: forces added straight to nodes (point loads).
+
+Amplitudes: an item carries a reference value (a pressure, a vector, a displacement field) scaled by
+a factor; a :class:`job.Step` ramps the factor over the step, linearly from where the previous step
+left it to a target (or along a path of its own), and an item that a step does not mention keeps its
+factor. Signs: the residual is R = f_int - f_ext, so loads contribute -(their virtual work).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from petsc4py import PETSc
+
+
+class ItemError(ValueError):
+    """An item that cannot be used; the message names the value and the fix."""
+
+
+def _finite(name: str, value, shape: tuple = ()) -> np.ndarray:
+    a = np.asarray(value, dtype=float)
+    if a.shape != shape or not np.all(np.isfinite(a)):
+        want = "a finite number" if shape == () else f"{shape[0]} finite numbers"
+        raise ItemError(f"{name} = {value!r}: give {want}")
+    return a
+
+
+class Item:
+    """Base class: a factor ramped by the steps, no term, no state."""
+
+    kind = "load"          # "load", "support" or "contact"; for listings and default ramps
+
+    def __init__(self, name: str | None = None):
+        self.name = name
+        self.bcs: list = []
+        self._start, self._target = 0.0, 1.0      # without a Step: from 0 to 1 over the load range
+        self._path: Callable[[float], float] | None = None
+        self.factor = 0.0
+
+    # -- steps --------------------------------------------------------------------------------
+    def ramp(self, target) -> None:
+        """Over the coming step, go from the current factor to ``target`` (a number), or follow
+        ``target(s)`` (a callable of the step's load factor s in [0, 1])."""
+        self._start = self.factor
+        if callable(target):
+            self._path, self._target = target, None
+        else:
+            self._path, self._target = None, float(_finite(f"{self} target", target))
+
+    def hold(self) -> None:
+        """Keep the current factor over the coming step."""
+        self.ramp(self.factor)
+
+    def factor_at(self, t: float) -> float:
+        if self._path is not None:
+            return float(self._path(t))
+        return self._start + (self._target - self._start) * t
+
+    def set(self, t: float) -> None:
+        self.factor = self.factor_at(t)
+        self._apply(self.factor)
+
+    def _apply(self, factor: float) -> None:
+        pass
+
+    # -- the protocol's other parts ------------------------------------------------------------
+    def attach(self, ctx):
+        return None
+
+    def nodal(self):
+        """(dofs, forces) added to the nodes at the current factor, or None."""
+        return None
+
+    def commit(self) -> None:
+        pass
+
+    def restore(self) -> None:
+        pass
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name or ''})"
+
+
+class Displacement(Item):
+    """Prescribed displacement on a tagged boundary: u = factor * value (a vector, or a number for
+    one component), or u = field(x, factor) (x the (3, N) reference points; returns (2, N), or (N,)
+    for one component). ``component``: 0 (x or r), 1 (y or z), or None (both)."""
+
+    kind = "support"
+
+    def __init__(self, boundary: str, value=None, component: int | None = None, field=None):
+        super().__init__(boundary)
+        if component not in (None, 0, 1):
+            raise ItemError(f"component = {component!r}: use 0 (x), 1 (y) or None (both)")
+        if value is not None and field is not None:
+            raise ItemError(f"boundary {boundary!r}: give a value or a field, not both")
+        self.boundary, self.component, self.field = boundary, component, field
+        shape = () if component is not None else (2,)
+        self.value = None if value is None else _finite(f"displacement of {boundary!r}", value, shape)
+
+    def attach(self, ctx):
+        V, fdim = ctx.V, ctx.mesh.topology.dim - 1
+        facets = ctx.facets(self.boundary)
+        if self.field is not None:
+            if self.component is None:
+                self._g = fem.Function(V)
+                self.bcs = [fem.dirichletbc(self._g, fem.locate_dofs_topological(V, fdim, facets))]
+            else:
+                Vc = V.sub(self.component).collapse()[0]
+                self._g = fem.Function(Vc)
+                dofs = fem.locate_dofs_topological((V.sub(self.component), Vc), fdim, facets)
+                self.bcs = [fem.dirichletbc(self._g, dofs, V.sub(self.component))]
+            return None
+        if self.component is None:
+            self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+            dofs = fem.locate_dofs_topological(V, fdim, facets)
+            self.bcs = [fem.dirichletbc(self._c, dofs, V)]
+        else:
+            self._c = fem.Constant(ctx.mesh, PETSc.ScalarType(0.0))
+            dofs = fem.locate_dofs_topological(V.sub(self.component), fdim, facets)
+            self.bcs = [fem.dirichletbc(self._c, dofs, V.sub(self.component))]
+        return None
+
+    def _apply(self, factor):
+        if self.field is not None:
+            self._g.interpolate(lambda x: self.field(x, factor))
+            self._g.x.scatter_forward()
+        elif self.value is not None:
+            self._c.value = factor * self.value
+
+
+class Fixed(Displacement):
+    """u = 0 (or u[component] = 0) on a tagged boundary."""
+
+    def __init__(self, boundary: str, component: int | None = None):
+        super().__init__(boundary, None, component)
+
+
+class Pressure(Item):
+    """Follower pressure ``p`` (times the factor) on a tagged boundary: it pushes into the body, normal
+    to the current face (Nanson: t da = -p J F^-T N dA). Per unit reference thickness in plane stress."""
+
+    def __init__(self, boundary: str, p: float):
+        super().__init__(boundary)
+        self.boundary, self.p = boundary, float(_finite(f"pressure on {boundary!r}", p))
+
+    def attach(self, ctx):
+        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType(0.0))
+        N = ufl.FacetNormal(ctx.mesh)
+        F = ctx.update.F(ctx.u)
+        cof = ufl.det(F) * ufl.inv(F).T
+        v3 = ufl.as_vector([ctx.v[0], ctx.v[1], 0.0])
+        return -(-self._c * ufl.dot(cof * ufl.as_vector([N[0], N[1], 0.0]), v3) * ctx.weight
+                 * ctx.ds(self.boundary))
+
+    def _apply(self, factor):
+        self._c.value = factor * self.p
+
+
+class Traction(Item):
+    """Dead traction ``vector`` (times the factor) per unit reference area of a tagged boundary."""
+
+    def __init__(self, boundary: str, vector):
+        super().__init__(boundary)
+        self.boundary, self.vector = boundary, _finite(f"traction on {boundary!r}", vector, (2,))
+
+    def attach(self, ctx):
+        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+        return -(ufl.dot(self._c, ctx.v) * ctx.weight * ctx.ds(self.boundary))
+
+    def _apply(self, factor):
+        self._c.value = factor * self.vector
+
+
+class BodyForce(Item):
+    """Dead force ``vector`` (times the factor) per unit reference volume, e.g. gravity (0, -rho g)."""
+
+    def __init__(self, vector, name: str = "body_force"):
+        super().__init__(name)
+        self.vector = _finite("body force", vector, (2,))
+
+    def attach(self, ctx):
+        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+        dx = ufl.dx(domain=ctx.mesh, metadata={"quadrature_degree": 2 * ctx.degree + 1})
+        return -(ufl.dot(self._c, ctx.v) * ctx.weight * dx)
+
+    def _apply(self, factor):
+        self._c.value = factor * self.vector
+
+
+class PointLoad(Item):
+    """Dead force ``vector`` (times the factor) at the mesh node at ``point``: per unit thickness in
+    plane models (a line load through the thickness), a ring load's total in axisymmetry (pass the
+    total; it acts at the node's radius)."""
+
+    def __init__(self, point, vector, name: str = "point_load"):
+        super().__init__(name)
+        self.point = _finite("point of the load", point, (2,))
+        self.vector = _finite("point load", vector, (2,))
+
+    def attach(self, ctx):
+        from mpi4py import MPI
+        X = ctx.V.tabulate_dof_coordinates()
+        n = ctx.V.dofmap.index_map.size_local
+        d = np.linalg.norm(X[:n, :2] - self.point, axis=1) if n else np.array([np.inf])
+        best, owner = ctx.mesh.comm.allreduce((float(d.min()), ctx.mesh.comm.rank), op=MPI.MINLOC)
+        size = ctx.mesh.comm.allreduce(float(np.ptp(X[:n, :2], axis=0).max()) if n else 0.0, op=MPI.MAX)
+        if best > 1e-8 * max(size, 1.0):
+            raise ItemError(f"no mesh node at {tuple(self.point)} for the point load (nearest at "
+                            f"{best:.3g}): put a node there")
+        bs = ctx.V.dofmap.index_map_bs
+        node = int(np.argmin(d)) if ctx.mesh.comm.rank == owner else None
+        self._dofs = np.array([], dtype=np.int32) if node is None else bs * node + np.arange(bs)
+        return None
+
+    def nodal(self):
+        return self._dofs, np.broadcast_to(self.factor * self.vector, (len(self._dofs) // 2, 2)).ravel()

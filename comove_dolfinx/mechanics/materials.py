@@ -1,0 +1,118 @@
+"""Materials as objects: elastic constants, or elastic-plastic laws with one update signature.
+
+A body's material is one of
+
+* :class:`Elastic` (E, nu): the stress is the stress update's (hypo- or hyperelastic, see updates.py);
+* :class:`J2` (E, nu, hardening): von Mises plasticity, radial return (plane strain, axisymmetry) or
+  Simo and Taylor's plane-stress return, with isotropic hardening (docs/theory.md section 4);
+* :class:`Chen` (E, nu, hardening): Chen Zhi-da's single-parameter rate law, integrated explicitly.
+
+An elastic-plastic material maps, at every quadrature point, the rotated old stress and the trial
+stress of the increment (and the plastic strain of the last converged increment) to the new stress,
+its derivatives and, in plane stress, the thickness strain of the increment with its derivatives
+(:meth:`Plastic.update`, NumPy); and the same law in UFL for facet integrals (:meth:`Plastic.facet`).
+Storage: 4-vectors (xx, yy, zz, xy) per point, as in return_maps.py.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import return_maps as rm
+from . import return_maps_ufl as rm_ufl
+from .material_data import Elastic, Hardening, MaterialError
+
+__all__ = ["Chen", "Elastic", "Hardening", "J2", "MaterialError", "Plastic", "PointUpdate", "as_material"]
+
+PLANE_STRESS = "plane_stress"
+
+
+@dataclass
+class PointUpdate:
+    """What a plastic material returns for N points (arrays over the points)."""
+
+    sig: np.ndarray                 # (N, 4) stress at the end of the increment
+    p: np.ndarray                   # (N,) equivalent plastic strain
+    D: np.ndarray                   # (N, 4, 4) d sig / d sig_tr
+    D_rot: np.ndarray | None        # (N, 4, 4) d sig / d sig_rot (None where sig depends on sig_tr only)
+    ezz: np.ndarray | None = None   # plane stress: log thickness strain of the increment
+    dezz_tr: np.ndarray | None = None    # (N, 4) its derivative by sig_tr
+    dezz_rot: np.ndarray | None = None   # (N, 4) its derivative by sig_rot
+
+
+@dataclass(frozen=True)
+class Plastic:
+    """An elastic-plastic material: elastic constants and a hardening table (docs/theory.md 4)."""
+
+    E: float
+    nu: float
+    hardening: Hardening
+    law = ""
+
+    def __post_init__(self):
+        object.__setattr__(self, "elastic", Elastic(self.E, self.nu))
+        if not isinstance(self.hardening, Hardening):
+            raise MaterialError(f"hardening = {self.hardening!r}: give a Hardening (Hardening.table, "
+                                "Hardening.linear or Hardening.perfect)")
+
+    def update(self, sig_rot: np.ndarray, sig_tr: np.ndarray, p_n: np.ndarray, kind: str) -> PointUpdate:
+        """The increment at N points: rotated old stress, trial stress, plastic strain at its start."""
+        out = self._update(sig_rot, sig_tr, p_n, kind)
+        if kind == PLANE_STRESS:
+            out.ezz, out.dezz_tr, out.dezz_rot = rm.plane_stress_thickness(
+                out.sig, sig_tr, sig_rot, out.D, out.D_rot, self.elastic)
+        return out
+
+    def facet(self, sig_rot, sig_tr, p_n, kind: str):
+        """The same law in UFL at a facet point: (stress, thickness strain or None)."""
+        sig = self._facet(sig_rot, sig_tr, p_n, kind)
+        ezz = (rm_ufl.plane_stress_thickness(sig, sig_tr, sig_rot, self.elastic)
+               if kind == PLANE_STRESS else None)
+        return sig, ezz
+
+    def _update(self, sig_rot, sig_tr, p_n, kind) -> PointUpdate:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def _facet(self, sig_rot, sig_tr, p_n, kind):  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+class J2(Plastic):
+    """Von Mises plasticity with isotropic hardening, backward-Euler return map."""
+
+    law = "j2"
+
+    def _update(self, sig_rot, sig_tr, p_n, kind):
+        sig, p, D, _ = rm.j2_return(sig_tr, p_n, self.elastic, self.hardening, kind)
+        return PointUpdate(sig, p, D, None)
+
+    def _facet(self, sig_rot, sig_tr, p_n, kind):
+        if kind == PLANE_STRESS:
+            return rm_ufl.j2_return_plane_stress(sig_tr, p_n, self.elastic, self.hardening)
+        return rm_ufl.j2_return(sig_tr, p_n, self.elastic, self.hardening)
+
+
+class Chen(Plastic):
+    """Chen Zhi-da's single-parameter rate law, one explicit step per increment."""
+
+    law = "chen"
+
+    def _update(self, sig_rot, sig_tr, p_n, kind):
+        sig, p, D, D_rot, _ = rm.chen_update(sig_rot, sig_tr, p_n, self.elastic, self.hardening, kind)
+        return PointUpdate(sig, p, D, D_rot)
+
+    def _facet(self, sig_rot, sig_tr, p_n, kind):
+        return rm_ufl.chen_update(sig_rot, sig_tr, p_n, self.elastic, self.hardening, kind)
+
+
+LAWS = {"j2": J2, "chen": Chen}
+
+
+def as_material(E: float, nu: float, law: str | None = None, hardening: Hardening | None = None):
+    """Elastic(E, nu) or the plastic law ``law`` ("j2", "chen") with ``hardening``."""
+    if law is None:
+        return Elastic(E, nu)
+    if law not in LAWS:
+        raise MaterialError(f"law = {law!r} is unknown: choose one of {', '.join(LAWS)}")
+    return LAWS[law](E, nu, hardening)

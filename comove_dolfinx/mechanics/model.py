@@ -1,0 +1,275 @@
+"""The finite-element model of a body and its items: spaces, state, residual and exact Jacobian.
+
+Equilibrium is written on the reference mesh (the co-moving coordinates) with the nominal stress
+P = J sigma F^-T (docs/theory.md sections 1 and 5), sigma from the stress update of updates.py and, for
+elastic-plastic materials, the return map at the quadrature points (materials.py, state.py):
+
+    R(u; v) = int P : Grad3 v  w dX  + (the items' terms: loads, contact) = 0,
+
+w = 2 pi r (axisymmetry) or the thickness b. The Jacobian is exact: the geometric part comes from UFL
+differentiation of P at fixed sigma, the material part from UFL differentiation of the trial stress,
+mapped by the return map's derivative D = d sigma / d sigma_trial (identity for elastic materials,
+where UFL differentiates the update directly), and in plane-stress plasticity the part of the
+thickness stretch, dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot). A Taylor test checks it
+(taylor.py, tests/test_taylor.py).
+
+Items (loads.py, contact/) build their terms from a :class:`Context` handed to them once: data flows
+from the model to the items, never back. The load factor t of ``set_load`` sets every item.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from ufl.algorithms import expand_derivatives
+
+from .. import compat
+from ..parallel import agree
+from .body import Body
+from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
+from .quadrature import QuadratureRule
+from .state import InvertedElement, QuadratureState, ReturnMapFailure
+from .updates import make_update
+
+__all__ = ["Context", "InvertedElement", "Model", "ReturnMapFailure"]
+
+
+@dataclass
+class Context:
+    """What an item sees of the model while it builds its terms (at build time only)."""
+
+    mesh: object
+    meshdata: object
+    V: object                     # displacement space
+    u: object                     # current displacement (Function)
+    u_n: object                   # displacement of the last converged increment (Function)
+    v: object                     # test function
+    x: object                     # reference coordinates
+    kin: Kinematics
+    update: object                # the stress update (its F(u) is the loads' deformation gradient)
+    E: float                      # Young's modulus (scales the contact stiffness)
+    degree: int
+    facet_traction: object        # (N, u) -> in-plane components of P N on facets
+
+    def facets(self, name: str) -> np.ndarray:
+        ft = self.meshdata.facet_tags
+        return ft.indices[ft.values == self.meshdata.ds_id(name)]
+
+    def ds(self, name: str, metadata: dict | None = None):
+        measure = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.meshdata.facet_tags)
+        return measure(self.meshdata.ds_id(name), metadata=metadata or {})
+
+    @property
+    def weight(self):
+        return self.kin.weight()
+
+
+class Model:
+    """A body and its items (loads, supports, contact), compiled into residual and Jacobian forms."""
+
+    def __init__(self, body: Body, items=()):
+        self.body = body
+        self.meshdata = body.mesh
+        self.mesh = msh = body.mesh.mesh
+        self.comm = msh.comm
+        self.elastic, self.plastic = body.elastic, body.plastic
+        self.degree = body.degree
+        self.x = ufl.SpatialCoordinate(msh)
+        self.kin = Kinematics(body.kind, self.x, body.thickness)
+        self.rule = QuadratureRule(msh, body.rule_degree())
+        self.update = make_update(body.update, self.kin, self.elastic)
+        self.V = compat.function_space(msh, "Lagrange", body.degree, (2,))
+        self.u = fem.Function(self.V, name="displacement")
+        self.u_n = fem.Function(self.V, name="displacement_n")
+        self.du = fem.Function(self.V, name="newton_correction")
+        self.v = ufl.TestFunction(self.V)
+        self.u_trial = ufl.TrialFunction(self.V)
+        self.state = QuadratureState(self.rule, self.plastic, body.kind, body.degree)
+        self.items = list(items)
+        self.load = 0.0
+        self.bcs: list = []
+
+    # shortcuts to the state (read by outputs and tests)
+    @property
+    def sigma(self):
+        return self.state.sigma
+
+    @property
+    def sigma_n(self):
+        return self.state.sigma_n
+
+    @property
+    def p(self):
+        return self.state.p
+
+    @property
+    def p_n(self):
+        return self.state.p_n
+
+    @property
+    def F22_n(self):
+        return self.state.F22_n
+
+    # ----------------------------------------------------------------------------------------
+    # Forms
+    # ----------------------------------------------------------------------------------------
+    def context(self) -> Context:
+        return Context(self.mesh, self.meshdata, self.V, self.u, self.u_n, self.v, self.x, self.kin,
+                       self.update, self.elastic.E, self.degree, self.facet_traction)
+
+    def finalize(self, jit_options: dict | None = None) -> None:
+        """Build and compile the residual, the Jacobian and the stress evaluation (once)."""
+        u, v, dx, st = self.u, self.v, self.rule.dx, self.state
+        up = self.update.build(u, self.u_n, st.sigma_n)
+        F22 = st.F22 if st.F22 is not None else up.F22
+        F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+        self.F = F
+        J = ufl.det(F)
+        w = self.kin.weight()
+        P = J * to_tensor(st.sigma) * ufl.inv(F).T
+        internal = ufl.inner(P, self.kin.grad3(v)) * w * dx
+        self._internal, self._internal_form, self._jit = internal, None, jit_options
+        ctx = self.context()
+        R = internal
+        for item in self.items:
+            term = item.attach(ctx)
+            if term is not None:
+                R = R + term
+        self.bcs = [bc for item in self.items for bc in item.bcs]
+        # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
+        # (+ D_rot d sigma_rot) and, in plane-stress plasticity, the thickness stretch's part
+        dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
+        dsig = to_tensor(dsig_tr)
+        if self.plastic is not None:
+            dsig_rot = to_vec(ufl.derivative(up.sigma_rot, u, self.u_trial))
+            dvec = ufl.dot(st.D, dsig_tr)
+            if st.D_rot is not None:
+                dvec = dvec + ufl.dot(st.D_rot, dsig_rot)
+            dsig = to_tensor(dvec)
+        Jac = ufl.derivative(R, u, self.u_trial) + \
+            ufl.inner(J * dsig * ufl.inv(F).T, self.kin.grad3(v)) * w * dx
+        if st.F22 is not None:
+            # the direction of a derivative must be free of unevaluated derivatives
+            dF22 = expand_derivatives(st.F22 * (ufl.dot(st.G_tr, dsig_tr) + ufl.dot(st.G_rot, dsig_rot)))
+            Jac = Jac + ufl.derivative(internal, st.F22, dF22)
+        self.residual_form = compat.form(R, jit_options)
+        self.jacobian_form = compat.form(Jac, jit_options)
+        # everything the constitutive stage needs, in one evaluation per iteration
+        parts = [to_vec(up.sigma)]
+        if self.plastic is not None:
+            parts.append(to_vec(up.sigma_rot))
+        if up.state_new is not None:
+            parts.append(up.state_new)
+            st.state_new = np.zeros((self.rule.size, 4))
+        parts.append(ufl.as_vector([ufl.det(self.update.F(u))]))
+        self._eval = self.rule.expression(ufl.as_vector([c for p in parts for c in p]))
+        self.set_load(0.0)
+
+    @property
+    def internal_force_form(self):
+        """The internal force vector F_int = int P : Grad v (without the items' terms), compiled on
+        first use: its norm is the force scale of the "force" convergence test."""
+        if self._internal_form is None:
+            self._internal_form = compat.form(self._internal, self._jit)
+        return self._internal_form
+
+    def facet_traction(self, N, u=None):
+        """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the
+        current one), for Nitsche terms: the constitutive update evaluated at the facet's points as
+        a UFL function of u, from the converged state of the last increment (cell-wise DG fits) and,
+        for elastic-plastic bodies, the material's law in UFL. Everything that varies within an
+        increment is a function of u, so the term's Jacobian is exact, and the traction at a lag
+        state u_lag depends on u_lag and converged state only (docs/theory.md section 6.3)."""
+        u = self.u if u is None else u
+        st = self.state
+        up = self.update.build(u, self.u_n, st.facet("sigma_n"))
+        sig, F22 = up.sigma, up.F22
+        if self.plastic is not None:
+            p_n = ufl.max_value(st.facet("p_n"), 0.0)            # the fit may dip below 0
+            sig, ezz = self.plastic.facet(up.sigma_rot, up.sigma, p_n, self.kin.model)
+            if ezz is not None:
+                F22 = st.facet("F22_n") * ufl.exp(ezz)
+        F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+        PN = ufl.det(F) * sig * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0.0])
+        return ufl.as_vector([PN[0], PN[1]])
+
+    # ----------------------------------------------------------------------------------------
+    # Load factor, constitutive evaluation, commit / restore
+    # ----------------------------------------------------------------------------------------
+    def set_load(self, t: float) -> None:
+        """Set every item (loads, prescribed displacements, obstacles) to load factor t."""
+        self.load = t
+        for item in self.items:
+            item.set(t)
+
+    def nodal_loads(self):
+        """(owned dofs, their residual entries -f) of the items' nodal forces, or None."""
+        parts = [item.nodal() for item in self.items]
+        parts = [pt for pt in parts if pt is not None]
+        if not parts:
+            return None
+        return (np.concatenate([d for d, _ in parts]).astype(np.int32),
+                -np.concatenate([f for _, f in parts]))
+
+    def evaluate_stress(self) -> None:
+        """Stress (and tangent) at every quadrature point for the current displacement iterate.
+
+        Raises, on every rank when it happens on any: :class:`InvertedElement` if det F <= 0 at a
+        point, :class:`ReturnMapFailure` if the update is not defined (NaN) or the return map fails.
+        """
+        err = None
+        try:
+            self.state.evaluate(self.rule.evaluate(self._eval))
+        except (InvertedElement, ReturnMapFailure) as e:
+            err = e
+        except Exception as e:                 # noqa: BLE001 - e.g. a return map that did not converge
+            err = ReturnMapFailure(f"the constitutive update failed: {e}")
+        agree(self.comm, err)
+
+    def commit(self) -> None:
+        """Accept the current iterate as the converged state of the increment."""
+        for item in self.items:                # before u_n moves: they may need the increment
+            item.commit()
+        self.u_n.x.array[:] = self.u.x.array
+        self.state.commit()
+
+    def restore(self) -> None:
+        """Return to the last converged state (after a failed increment)."""
+        self.u.x.array[:] = self.u_n.x.array
+        for item in self.items:
+            item.restore()
+
+    # ----------------------------------------------------------------------------------------
+    # Derived quantities
+    # ----------------------------------------------------------------------------------------
+    def cauchy_stress(self) -> np.ndarray:
+        """Cauchy stress at the points of the current iterate, shape (points, 4)."""
+        return self.rule.view(self.state.sigma)
+
+    def reaction_forces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """Reference positions (n, 2) and forces (n, 2) that the supports exert on the nodes of a
+        tagged boundary (this rank's owned nodes), taken from the residual at the current state:
+        at a constrained dof R = f_int - f_ext is the force the support must supply."""
+        b = compat.create_vector(self.residual_form)
+        compat.assemble_vector(b, self.residual_form)
+        fdim = self.mesh.topology.dim - 1
+        ft = self.meshdata.facet_tags
+        facets = ft.indices[ft.values == self.meshdata.ds_id(name)]
+        dofs = fem.locate_dofs_topological(self.V.sub(0), fdim, facets)
+        bs = self.V.dofmap.index_map_bs
+        nodes = np.unique(dofs // bs)
+        nodes = nodes[nodes < self.V.dofmap.index_map.size_local]
+        f = b.array.reshape(-1, bs)[nodes].copy()
+        b.destroy()
+        return self.V.tabulate_dof_coordinates()[nodes, :2], f
+
+    def reaction(self, name: str) -> np.ndarray:
+        """Total force (x, y) that the supports exert on a tagged boundary (all ranks)."""
+        return self.comm.allreduce(self.reaction_forces(name)[1].sum(axis=0), op=MPI.SUM)
+
+    def num_dofs(self) -> int:
+        imap = self.V.dofmap.index_map
+        return imap.size_global * self.V.dofmap.index_map_bs

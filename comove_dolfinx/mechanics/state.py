@@ -1,0 +1,115 @@
+"""The material state at the quadrature points, and its copies on the facets.
+
+Quadrature functions (4-vectors xx, yy, zz, xy; see kinematics.py): ``sigma_n`` the converged state of
+increment n (the stress, or for the polar update the unrotated stress), ``sigma`` the stress at the
+current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain, ``D`` (and
+``D_rot`` for Chen's law) the derivatives of the return map; in plane-stress plasticity ``F22_n``/``F22``
+the thickness stretch, F22 = F22_n exp(ezz), and ``G_tr``/``G_rot`` the derivatives of ezz
+(docs/theory.md section 4.4).
+
+Facet integrals cannot see quadrature functions (dolfinx evaluates none there); the converged state
+is copied to cell-wise DG fits at each commit (exact interpolation for DG1 and the 3-point rule), from
+which the material law is evaluated again on the facets when a term asks for the stress there.
+"""
+from __future__ import annotations
+
+import numpy as np
+from dolfinx import fem
+
+from .. import compat
+from .quadrature import CellInterpolator, QuadratureRule
+
+
+class InvertedElement(RuntimeError):
+    """det F <= 0 at a quadrature point: the iterate is not admissible."""
+
+
+class ReturnMapFailure(RuntimeError):
+    """The constitutive update could not be evaluated (e.g. S-R split beyond 90 degrees)."""
+
+
+class QuadratureState:
+    """State of a body at its quadrature points (``plastic``: a materials.Plastic or None)."""
+
+    def __init__(self, rule: QuadratureRule, plastic, kind: str, degree: int):
+        self.rule, self.plastic, self.kind = rule, plastic, kind
+        r = rule
+        self.sigma_n = r.function((4,), "sigma_n")
+        self.sigma = r.function((4,), "sigma")
+        self.p_n = r.function((), "p_n") if plastic else None
+        self.p = r.function((), "p") if plastic else None
+        self.D = r.function((4, 4), "D") if plastic else None
+        self.D_rot = r.function((4, 4), "D_rot") if plastic and plastic.law == "chen" else None
+        self.F22_n = self.F22 = self.G_tr = self.G_rot = None
+        if plastic and kind == "plane_stress":
+            self.F22_n = r.function((), "F22_n", 1.0)
+            self.F22 = r.function((), "F22", 1.0)
+            self.G_tr = r.function((4,), "dezz_dtr")
+            self.G_rot = r.function((4,), "dezz_drot")
+        self.state_new: np.ndarray | None = None     # the update's own state, if not sigma
+        self._fit_degree = max(degree - 1, 0)
+        self._facet: dict = {}
+
+    # -- the constitutive stage (local to the rank: no collective call) -------------------------
+    def evaluate(self, vals: np.ndarray) -> None:
+        """From the evaluated update (columns: trial stress, rotated old stress if plastic, the
+        update's own state if any, det F) to the stress and tangents at the points."""
+        detF = vals[:, -1]
+        if not np.all(np.isfinite(vals)):
+            raise ReturnMapFailure("the stress update returned NaN (increment too large?)")
+        if detF.size and detF.min() <= 0.0:
+            raise InvertedElement(f"det F = {detF.min():.3g} <= 0 at a quadrature point")
+        view = self.rule.view
+        sig_tr, col = vals[:, 0:4], 4
+        if self.plastic is None:
+            view(self.sigma)[:] = sig_tr
+        else:
+            sig_rot, col = vals[:, 4:8], 8
+            out = self.plastic.update(sig_rot, sig_tr, self.p_n.x.array, self.kind)
+            view(self.sigma)[:] = out.sig
+            self.p.x.array[:] = out.p
+            view(self.D)[:] = out.D
+            if self.D_rot is not None:
+                view(self.D_rot)[:] = out.D_rot
+            if self.F22 is not None:
+                self.F22.x.array[:] = self.F22_n.x.array * np.exp(out.ezz)
+                view(self.G_tr)[:] = out.dezz_tr
+                view(self.G_rot)[:] = out.dezz_rot
+        if self.state_new is not None:
+            self.state_new[:] = vals[:, col:col + 4]
+
+    def commit(self) -> None:
+        """The current stress (or the update's own state) becomes the converged state."""
+        view = self.rule.view
+        if self.state_new is not None:
+            view(self.sigma_n)[:] = self.state_new
+        else:
+            self.sigma_n.x.array[:] = self.sigma.x.array
+        if self.plastic is not None:
+            self.p_n.x.array[:] = self.p.x.array
+            if self.F22_n is not None:
+                self.F22_n.x.array[:] = self.F22.x.array
+        self._fit("sigma_n", view(self.sigma_n))
+        if self.plastic is not None:
+            self._fit("p_n", self.p_n.x.array)
+            if self.F22_n is not None:
+                self._fit("F22_n", self.F22_n.x.array)
+
+    # -- copies on the facets --------------------------------------------------------------------
+    def facet(self, name: str):
+        """DG function holding a cell-wise fit of the converged state ``name`` (created on first use,
+        refreshed at each commit): "sigma_n" (4-vector), "p_n", "F22_n" (scalars)."""
+        if name not in self._facet:
+            shape = () if name in ("p_n", "F22_n") else (4,)
+            V = compat.function_space(self.rule.mesh, "DG", self._fit_degree, shape)
+            f = fem.Function(V, name=name + "_dg")
+            source = {"sigma_n": self.sigma_n, "p_n": self.p_n, "F22_n": self.F22_n}[name]
+            interp = CellInterpolator(self.rule, V)
+            interp(self.rule.view(source), f)
+            self._facet[name] = (f, interp)
+        return self._facet[name][0]
+
+    def _fit(self, name: str, values) -> None:
+        if name in self._facet:
+            f, interp = self._facet[name]
+            interp(values, f)

@@ -1,0 +1,197 @@
+"""Presets: the paper's scenes as parameter sets that build a public-API job (docs/scenes.md).
+
+Units: cm and kgf (stresses in kgf/cm^2), as in Shang & Chen's examples.
+
+Every scene is a dataclass; ``comove scenes`` lists the fields with their defaults and ``--set
+key=value`` overrides them. A scene builds its mesh (``mesh_data``), and from it the body, items,
+probes and steps of a :class:`comove_dolfinx.Job` (``job``), with the public API only.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import ClassVar
+
+from .. import geometry
+from ..contact import METHODS, Contact
+from ..job import PREDICTORS, Job, Step
+from ..mechanics.material_data import Elastic
+from ..mechanics.updates import UPDATES
+from ..solver import NewtonSettings
+
+
+class SceneError(ValueError):
+    """A scene name or parameter that cannot be used; the message says what to do."""
+
+
+@dataclass
+class Scene:
+    """Parameters shared by every scene (numerics)."""
+
+    name: ClassVar[str] = ""
+    summary: ClassVar[str] = ""
+    kind: ClassVar[str] = ""
+    columns: ClassVar[tuple[str, ...]] = ()
+    doc: ClassVar[dict[str, str]] = {
+        "E": "Young's modulus [kgf/cm^2]", "nu": "Poisson's ratio",
+        "update": f"stress update: {', '.join(UPDATES)}",
+        "degree": "displacement degree (1 or 2)", "size": "mesh size [cm]",
+        "order": "geometry order of the mesh (0: same as degree)",
+        "n_steps": "nominal number of equal load increments",
+        "max_cutbacks": "halvings of a failed increment before the run stops",
+        "mesh": "a Gmsh .msh file to use instead of the built-in geometry",
+        "predictor": "start of each increment: none (the last converged state), linear or quadratic "
+                     "(extrapolation of the last converged states), tangent (Euler step along the "
+                     "path's tangent)",
+    }
+
+    E: float = 1000.0
+    nu: float = 0.3
+    update: str = "sr"
+    degree: int = 2
+    size: float = 0.125
+    order: int = 0
+    n_steps: int = 20
+    max_cutbacks: int = 6
+    mesh: str = ""
+    predictor: str = "none"
+
+    # -- parameters --------------------------------------------------------------------------
+    def validate(self) -> None:
+        """Raise SceneError (or MaterialError) naming any unusable value and the fix."""
+        self.elastic()
+        if self.update not in UPDATES:
+            raise SceneError(f"update = {self.update!r} is unknown: choose one of {', '.join(UPDATES)}")
+        if self.degree not in (1, 2):
+            raise SceneError(f"degree = {self.degree}: use 1 or 2")
+        if self.order not in (0, 1, 2):
+            raise SceneError(f"order = {self.order}: use 1, 2 or 0 (same as degree)")
+        if not self.size > 0:
+            raise SceneError(f"size = {self.size}: the mesh size must be > 0")
+        if self.n_steps < 1:
+            raise SceneError(f"n_steps = {self.n_steps}: need at least one increment")
+        if self.max_cutbacks < 0:
+            raise SceneError(f"max_cutbacks = {self.max_cutbacks} must be >= 0")
+        if self.predictor not in PREDICTORS:
+            raise SceneError(f"predictor = {self.predictor!r} is unknown: choose one of "
+                             f"{', '.join(PREDICTORS)}")
+
+    def elastic(self) -> Elastic:
+        return Elastic(self.E, self.nu)
+
+    @property
+    def geometry_order(self) -> int:
+        return self.order or self.degree
+
+    @classmethod
+    def parameters(cls) -> list[tuple[str, object, str]]:
+        """(name, default, description) of every parameter."""
+        out = []
+        for f in dataclasses.fields(cls):
+            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            out.append((f.name, default, cls.doc.get(f.name, "")))
+        return out
+
+    def with_overrides(self, pairs: list[str]) -> "Scene":
+        """A copy with ``key=value`` overrides converted to each field's type."""
+        types = {f.name: type(f.default) if f.default is not dataclasses.MISSING else str
+                 for f in dataclasses.fields(self)}
+        changes = {}
+        for pair in pairs:
+            key, sep, text = pair.partition("=")
+            key = key.strip()
+            if not sep:
+                raise SceneError(f"--set {pair!r}: write key=value")
+            if key not in types:
+                raise SceneError(f"scene {self.name!r} has no parameter {key!r}; its parameters are: "
+                                 f"{', '.join(types)} (see 'comove scenes')")
+            changes[key] = _convert(key, text.strip(), types[key])
+        return dataclasses.replace(self, **changes)
+
+    # -- the job ---------------------------------------------------------------------------
+    def load_msh(self, comm, required):
+        return geometry.load_msh(self.mesh, comm, required=required)
+
+    def mesh_data(self, comm):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def build(self, md) -> tuple:  # pragma: no cover - interface
+        """(body, items, probes) of the scene on the mesh ``md``."""
+        raise NotImplementedError
+
+    @property
+    def load_max(self) -> float:
+        """Value of the history's ``load`` column at the end of the loading."""
+        raise NotImplementedError
+
+    def fibres(self) -> list:
+        """(name, reference direction) of the fibres whose normal stress goes to the XDMF output."""
+        return []
+
+    def newton_settings(self) -> NewtonSettings:
+        """Newton settings of the scene (the solver's defaults unless a scene needs others)."""
+        return NewtonSettings()
+
+    def steps(self) -> list[Step]:
+        """One step: every item from 0 to 1 in n_steps nominal increments."""
+        return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks)]
+
+    def job(self, md, writers=()) -> Job:
+        """The scene as a job on the mesh ``md`` (history ``load`` = load factor x load_max)."""
+        body, items, probes = self.build(md)
+        self.items = items
+        return Job(body, items, self.steps(), probes, writers, newton=self.newton_settings(),
+                   load=lambda t, s=self.load_max: t * s)
+
+
+def _convert(key: str, text: str, typ):
+    try:
+        if typ is bool:
+            if text.lower() in ("1", "true", "yes", "on"):
+                return True
+            if text.lower() in ("0", "false", "no", "off"):
+                return False
+            raise ValueError
+        return typ(text)
+    except ValueError:
+        raise SceneError(f"{key}={text!r} is not a valid {typ.__name__}") from None
+
+
+@dataclass
+class ContactScene(Scene):
+    """A scene whose body meets rigid obstacles: the contact parameters."""
+
+    doc: ClassVar[dict[str, str]] = {
+        **Scene.doc, "gap": "distance from the contact face to the rigid plane [cm]",
+        "mu": "Coulomb friction coefficient",
+        "contact": f"contact method: {', '.join(METHODS)} or off",
+        "gamma0": "contact stiffness gamma0: gamma = gamma0 E / h (penalty and Nitsche)",
+        "theta": "Nitsche variant: 1 symmetric, 0, -1 skew-symmetric",
+        "relag": "true Coulomb: re-solve each increment until the lagged pressure settles"}
+
+    gap: float = 1.0
+    mu: float = 0.1
+    contact: str = "penalty"
+    gamma0: float = 100.0
+    theta: int = 0
+    relag: bool = False
+
+    def validate(self):
+        super().validate()
+        if self.mu < 0:
+            raise SceneError(f"mu = {self.mu}: the friction coefficient must be >= 0")
+        if self.contact not in (*METHODS, "off"):
+            raise SceneError(f"contact = {self.contact!r}: choose {', '.join(METHODS)} or off")
+        if not self.gamma0 > 0:
+            raise SceneError(f"gamma0 = {self.gamma0} must be > 0")
+        if self.theta not in (1, 0, -1):
+            raise SceneError(f"theta = {self.theta}: use 1, 0 or -1")
+        if not self.gap >= 0:
+            raise SceneError(f"gap = {self.gap}: the obstacle must not start inside the body (gap >= 0)")
+
+    def contact_item(self, boundary: str, obstacle) -> Contact | None:
+        """The contact item of the scene's parameters (None when contact = off)."""
+        if self.contact == "off":
+            return None
+        return Contact(boundary, obstacle, method=self.contact, gamma0=self.gamma0, theta=self.theta,
+                       mu=self.mu, relag=self.relag)

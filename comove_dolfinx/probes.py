@@ -1,0 +1,142 @@
+"""Probes: the numbers a job records at every converged increment (the history's columns).
+
+A probe names its ``columns``, is attached once to the compiled model (``attach(model)``) and returns
+a dict of those columns for the converged state (``__call__(model)``); every rank calls it and gets
+the same values. A job's history is the increment's step and load columns followed by every probe's.
+
+    cm.NodeDisplacement("tip", (10.0, 0.0))           # tip_ux, tip_uy at the node at (10, 0)
+    cm.NodeDisplacement("centre", (0.0, 0.0), component=1, column="center_uz")
+    cm.ContactForce(contact, "force", component=1, scale=-2.0)   # symmetry: twice the quarter's
+    cm.ContactLength(contact, "contact_width", scale=2.0)
+    cm.Reaction("left")                               # left_fx, left_fy: the supports' force
+    cm.MaxPlasticStrain()
+    cm.Value("crown_gap", lambda model: ...)          # anything else, from the model
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from mpi4py import MPI
+
+
+class ProbeError(ValueError):
+    """A probe that cannot be placed (the message names the value and the fix)."""
+
+
+class Probe:
+    columns: tuple[str, ...] = ()
+
+    def attach(self, model) -> None:
+        pass
+
+    def __call__(self, model) -> dict:  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+class NodeDisplacement(Probe):
+    """Displacement of the mesh node at ``point`` (reference coordinates): columns ``<name>_ux``,
+    ``<name>_uy``, or one column (``column``, default ``<name>_u<x|y>``) for one ``component``."""
+
+    def __init__(self, name: str, point, component: int | None = None, column: str | None = None,
+                 tol: float = 1e-8):
+        self.name, self.point, self.component, self.tol = name, np.asarray(point, float), component, tol
+        if component is None:
+            self.columns = (f"{name}_ux", f"{name}_uy")
+        else:
+            self.columns = (column or f"{name}_u{'xy'[component]}",)
+
+    def attach(self, model) -> None:
+        V = model.V
+        X = V.tabulate_dof_coordinates()
+        n_owned = V.dofmap.index_map.size_local
+        d = np.linalg.norm(X[:n_owned, :2] - self.point, axis=1)
+        comm = model.comm
+        best, owner = comm.allreduce((float(d.min()) if d.size else np.inf, comm.rank), op=MPI.MINLOC)
+        if best > self.tol:
+            raise ProbeError(f"probe {self.name!r}: no mesh node at {tuple(self.point)} (nearest at "
+                             f"distance {best:.3g}); choose a mesh size that puts a node there")
+        self._comm, self._owner = comm, owner
+        self._dof = int(np.argmin(d)) if comm.rank == owner else -1
+
+    def value(self, f) -> np.ndarray:
+        """The probed node's value of a vector function of the displacement space."""
+        val = np.zeros(2)
+        if self._comm.rank == self._owner:
+            val[:] = f.x.array[2 * self._dof: 2 * self._dof + 2]
+        return self._comm.allreduce(val, op=MPI.SUM)
+
+    def __call__(self, model) -> dict:
+        u = self.value(model.u)
+        if self.component is None:
+            return dict(zip(self.columns, u))
+        return {self.columns[0]: u[self.component]}
+
+
+class ContactForce(Probe):
+    """Force of a contact item's obstacle on the body: ``component`` 0 or 1 times ``scale`` (one
+    column ``name``), or both components (``name``_fx, ``name``_fy)."""
+
+    def __init__(self, contact, name: str = "contact_force", component: int | None = 1, scale: float = 1.0):
+        self.contact, self.component, self.scale = contact, component, scale
+        self.columns = (name,) if component is not None else (f"{name}_fx", f"{name}_fy")
+
+    def __call__(self, model) -> dict:
+        f = self.scale * self.contact.force()
+        return {self.columns[0]: f[self.component]} if self.component is not None else dict(zip(self.columns, f))
+
+
+class ContactLength(Probe):
+    """Length of the contact set in the current configuration (times ``scale``): in axisymmetry the
+    radius of a contact disc around the axis."""
+
+    def __init__(self, contact, name: str = "contact_length", scale: float = 1.0):
+        self.contact, self.scale, self.columns = contact, scale, (name,)
+
+    def __call__(self, model) -> dict:
+        return {self.columns[0]: self.scale * self.contact.zone().extent}
+
+
+class ContactEdges(Probe):
+    """Where the contact set begins and ends: the smallest and largest current coordinate ``axis``
+    of the contact boundary's nodes that carry pressure (``<name>_min``, ``<name>_max``; NaN
+    without contact)."""
+
+    def __init__(self, contact, name: str = "contact_edge", axis: int = 0):
+        self.contact, self.axis = contact, axis
+        self.columns = (f"{name}_min", f"{name}_max")
+
+    def __call__(self, model) -> dict:
+        return dict(zip(self.columns, self.contact.zone_edges(self.axis)))
+
+
+class Reaction(Probe):
+    """Total force that the supports exert on a tagged boundary: ``<name>_fx``, ``<name>_fy``."""
+
+    def __init__(self, boundary: str, name: str | None = None):
+        self.boundary = boundary
+        name = name or boundary
+        self.columns = (f"{name}_fx", f"{name}_fy")
+
+    def __call__(self, model) -> dict:
+        return dict(zip(self.columns, model.reaction(self.boundary)))
+
+
+class MaxPlasticStrain(Probe):
+    """Largest equivalent plastic strain over the quadrature points (0 for elastic bodies)."""
+
+    columns = ("max_plastic_strain",)
+
+    def __call__(self, model) -> dict:
+        p = model.p.x.array if model.p is not None else np.zeros(0)
+        return {self.columns[0]: model.comm.allreduce(float(p.max()) if p.size else 0.0, op=MPI.MAX)}
+
+
+class Value(Probe):
+    """A column computed by ``fn(model)`` (it must return the same number on every rank)."""
+
+    def __init__(self, name: str, fn: Callable):
+        self.columns, self.fn = (name,), fn
+
+    def __call__(self, model) -> dict:
+        return {self.columns[0]: float(self.fn(model))}

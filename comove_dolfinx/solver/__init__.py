@@ -1,0 +1,6 @@
+"""Newton iterations, line searches and the increment loop."""
+from .increments import Increment, IncrementalSolver, RunResult, StepSettings, _extrapolate
+from .newton import Newton, NewtonSettings, Timer
+
+__all__ = ["Increment", "IncrementalSolver", "Newton", "NewtonSettings", "RunResult", "StepSettings", "Timer",
+           "_extrapolate"]

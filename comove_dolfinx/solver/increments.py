@@ -1,0 +1,201 @@
+"""The increment loop: load factor t from 0 to t_end in increments, each solved by Newton.
+
+An increment starts from the last converged state, or with ``predictor`` from the Lagrange
+extrapolation (linear or quadratic in the load factor) of the last converged states, or ("tangent")
+from the Euler step along the path's tangent at the last converged state: K du/dt = -dR/dt, with K
+the tangent Newton factorised last (the algorithmic tangent of the increment just converged, so its
+plastic points keep loading) and dR/dt a forward difference in the load factor; one
+back-substitution, no new factorisation, so it is not counted as a Newton iteration. Unlike an
+extrapolation it knows where the path is heading at t_n, not where it came from; the first
+increment, before any factorisation, starts from the unloaded state.
+An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
+``divergence`` over the increment's first fails the increment; the loop then restores the last
+converged state and halves the increment, down to the smallest increment dt_nom / 2^max_cutbacks;
+when an increment of that size fails, the run stops cleanly (every converged increment has already
+been handed out). The floor is absolute, not a count of failures in a row: near a limit load, where
+increments converge only when small and fail again once grown, a count would creep towards the limit
+for ever. After ``grow_after`` easy increments (at most ``easy_its`` iterations) the increment
+doubles again, never beyond its nominal size, so the run comes back onto the nominal load levels.
+
+Data flows one way: :meth:`IncrementalSolver.increments` yields each converged increment before
+committing it (the consumer reads the converged state), and commits when the consumer asks for the
+next one; nothing is called back.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from ..mechanics.model import Model
+from ..parallel import collective
+from .newton import Newton, NewtonSettings, Timer
+
+log = logging.getLogger("comove")
+
+
+def _extrapolate(points, t: float) -> np.ndarray:
+    """Lagrange extrapolation of the converged states ``points`` = [(t_i, u_i)] to load t."""
+    out = np.zeros_like(points[0][1])
+    for i, (ti, ui) in enumerate(points):
+        w = 1.0
+        for j, (tj, _) in enumerate(points):
+            if j != i:
+                w *= (t - tj) / (ti - tj)
+        out += w * ui
+    return out
+
+
+@dataclass
+class StepSettings:
+    """Increment control: nominal number of equal increments over the load range, cut-back, growth."""
+
+    n_steps: int = 20
+    t_end: float = 1.0
+    max_cutbacks: int = 6
+    easy_its: int = 8
+    grow_after: int = 1
+    predictor: bool | int | str = False  # where an increment starts: False the last converged state;
+                                   # True or 1, 2 its linear, quadratic extrapolation (hurts thin
+                                   # rotating bodies); "tangent" the Euler step along the path
+    chord_tol: float = 0.1         # "tangent": take the last chord instead when |v - c| > chord_tol |c|
+                                   # (ring: 0.01-0.05 along the crush, 0.18 and 0.75 where the
+                                   # tangent carried a spurious part and the next increment failed)
+
+
+@dataclass
+class Increment:
+    """What the loop reports of a converged increment."""
+
+    step: int
+    load: float
+    newton_its: int               # iterations of the converged attempt
+    wall_s: float                 # wall time since the previous increment, failed attempts included
+    cutbacks: int = 0
+    failed_its: int = 0           # iterations spent in failed attempts of this increment
+
+
+@dataclass
+class RunResult:
+    increments: list[Increment] = field(default_factory=list)
+    completed: bool = False
+    message: str = ""
+
+    @property
+    def newton_its(self) -> list[int]:
+        return [inc.newton_its for inc in self.increments]
+
+
+class IncrementalSolver:
+    """Load factor t from 0 to t_end in increments, each solved by Newton, with cut-back."""
+
+    def __init__(self, model: Model, steps: StepSettings | None = None,
+                 newton: NewtonSettings | Newton | None = None, timer: Timer | None = None):
+        """``newton``: settings, or a :class:`Newton` of the model to reuse (its matrix, factors
+        and residual scale carry over from step to step of a job)."""
+        self.model = model
+        self.steps = steps or StepSettings()
+        if self.steps.n_steps < 1:
+            raise ValueError(f"n_steps = {self.steps.n_steps}: need at least one increment")
+        if isinstance(newton, Newton):
+            self.newton, self.timer = newton, newton.timer
+        else:
+            self.timer = timer or Timer()
+            self.newton = Newton(model, newton, self.timer)
+        self.relaggers = [item for item in model.items if hasattr(item, "relag_pass")]
+        self.max_passes = max([item.max_passes for item in self.relaggers] + [1])
+
+    def _agrees_with_chord(self, rate: fem.Function, past) -> bool:
+        """Whether the path's tangent ``rate`` at the newest state lies within ``chord_tol`` of the
+        chord of the last increment, |v - c| <= chord_tol |c|. Near a mechanism (a ring of plastic
+        hinges) the tangent is almost singular and its solution can carry a spurious part along it;
+        the predictor then takes the chord (linear extrapolation) instead."""
+        (t0, u0), (t1, u1) = past[-2:]
+        chord = (u1 - u0) / (t1 - t0)
+        imap = self.model.V.dofmap.index_map
+        n = imap.size_local * self.model.V.dofmap.index_map_bs
+        local = np.array([np.sum((rate.x.array[:n] - chord[:n]) ** 2), np.sum(chord[:n] ** 2)])
+        diff2, chord2 = self.model.comm.allreduce(local, op=MPI.SUM)
+        return bool(diff2 <= self.steps.chord_tol ** 2 * chord2)
+
+    def run(self, callbacks=(), progress=None) -> RunResult:
+        """Run every increment; each callback(model, increment) is called after every converged one
+        (a failure of a callback on one rank stops every rank). ``progress``: optional object with
+        ``update(dt)`` (tqdm)."""
+        result, last = RunResult(), 0.0
+        for inc in self.increments(result):
+            with self.timer("output"):            # before commit: the increment is still visible
+                for cb in callbacks:
+                    collective(self.model.comm, cb, self.model, inc)
+            if progress is not None:
+                progress.update(inc.load - last)
+            last = inc.load
+        return result
+
+    def increments(self, result: RunResult | None = None):
+        """Yield every converged increment while the model still holds its state (not yet
+        committed); ``result`` (a RunResult) gathers the increments and says how the loop ended."""
+        result = RunResult() if result is None else result
+        m, st = self.model, self.steps
+        dt_nom = st.t_end / st.n_steps
+        dt, t, step, cut, easy = dt_nom, 0.0, 0, 0, 0
+        dt_min = dt_nom / 2.0 ** st.max_cutbacks
+        past = [(0.0, m.u.x.array.copy())]          # converged (load, u), newest last
+        tangent = st.predictor == "tangent"
+        if isinstance(st.predictor, str) and not tangent:
+            raise ValueError(f"predictor = {st.predictor!r}: choose 0, 1, 2 or tangent")
+        # the tangent keeps the last two states: its fallback is the linear extrapolation (the chord)
+        order = 1 if tangent else int(st.predictor)
+        rate, have_rate = fem.Function(m.V) if tangent else None, False
+        t_mark, failed_its = time.perf_counter(), 0
+        tol = 1e-12 * st.t_end
+        while t < st.t_end - tol:
+            dt = min(dt, st.t_end - t)
+            t_try = t + dt
+            m.set_load(t_try)
+            if have_rate:
+                m.u.x.array[:] = m.u_n.x.array + (t_try - t) * rate.x.array
+            elif order and len(past) > 1:
+                m.u.x.array[:] = _extrapolate(past[-(order + 1):], t_try)
+            ok, its, reason = self.newton.solve()
+            passes = 1
+            while ok and passes < self.max_passes and any([item.relag_pass() for item in self.relaggers]):
+                ok, more, reason = self.newton.solve()     # true Coulomb: re-lag the pressure
+                its += more
+                passes += 1
+            if not ok:
+                m.restore()
+                cut += 1
+                failed_its += its
+                log.info("  increment to t = %.6g failed (%s)", t_try, reason)
+                if dt <= dt_min * (1.0 + 1e-9):
+                    m.set_load(t)
+                    result.message = (f"stopped at load factor {t:.6g}: an increment of the "
+                                      f"smallest size ({dt:.3g}, after {cut - 1} cut-backs in a row)"
+                                      f" failed: {reason}")
+                    return
+                dt *= 0.5
+                easy = 0
+                continue
+            t, step = t_try, step + 1
+            inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its)
+            result.increments.append(inc)
+            cut, failed_its = 0, 0
+            yield inc
+            m.commit()
+            past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
+            if tangent:
+                have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
+                             and self._agrees_with_chord(rate, past))
+            t_mark = time.perf_counter()
+            easy = easy + 1 if its <= st.easy_its else 0
+            # grow back towards the nominal increment, staying on the grid of the doubled step
+            if easy >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
+                dt = min(2 * dt, dt_nom)
+                easy = 0
+        result.completed = True
+        result.message = f"completed {step} increments"

@@ -1,0 +1,222 @@
+"""Newton iterations with the exact Jacobian and a direct solver.
+
+Newton works on the total displacement u. Each iteration evaluates the stress update (and return
+map) at the quadrature points, assembles the residual and the exact Jacobian and solves with MUMPS;
+the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic analysis is done once.
+
+Convergence: ||R|| <= rtol * R_scale + atol, with R_scale (``scale``) either the largest initial
+residual norm of the increments so far ("initial", a force scale of the run, which depends on the
+increment size), or the norm of the internal force vector F_int = int P : Grad v at the iterate
+("force": at equilibrium the applied loads, reactions and contact forces, so rtol bounds the
+out-of-balance force as a fraction of the forces the body carries), or a Newton correction
+||du|| <= stol * ||u|| (the residual of a stiff body stalls at a round-off floor set by its
+internal forces, which can exceed rtol * R_scale when the load increments are small; only a full
+step counts). Corrections are scaled by the line searches of linesearch.py. A failure of the
+linear solve on any rank (an error, a negative PETSc reason, a correction that is not finite) is a
+failed iteration on every rank. docs/theory.md section 7.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from collections import defaultdict
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from .. import compat
+from ..mechanics.model import InvertedElement, Model, ReturnMapFailure
+from ..parallel import first_failure
+from .linesearch import LineSearches
+
+log = logging.getLogger("comove")
+
+
+class Timer:
+    """Wall-time accumulated per category (assembly, solve, stress update, output, ...)."""
+
+    def __init__(self):
+        self.totals: dict[str, float] = defaultdict(float)
+
+    @contextmanager
+    def __call__(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.totals[name] += time.perf_counter() - t0
+
+    def report(self) -> str:
+        total = sum(self.totals.values())
+        parts = [f"{k} {v:.2f} s ({100 * v / total:.0f} %)" for k, v in
+                 sorted(self.totals.items(), key=lambda kv: -kv[1])] if total else []
+        return "timing: " + ", ".join(parts)
+
+
+@dataclass
+class NewtonSettings:
+    rtol: float = 1e-8
+    atol: float = 1e-12
+    stol: float = 1e-10
+    max_it: int = 25
+    divergence: float = 1e12
+    backtracks: int = 4
+    free_its: int = 5              # corrections taken in full (unless inadmissible) before the Armijo test
+    line_search: bool | str | None = None   # None: on when the model has contact (boundary) terms;
+                                            # True/"residual": Armijo on ||R||; "energy": du.R(u + a du);
+                                            # False/"none": off
+    energy_eta: float = 0.8        # energy search: accept a step once |du.R| <= eta |du.R(u)|
+    scale: str = "initial"         # what rtol is relative to: "initial", the largest initial
+                                   # residual of the run; "force", ||F_int|| of the iterate
+
+
+class Newton(LineSearches):
+    """Newton-Raphson on ``model.u`` with an exact Jacobian and a direct solver (MUMPS)."""
+
+    def __init__(self, model: Model, settings: NewtonSettings | None = None,
+                 timer: Timer | None = None):
+        self.model = model
+        self.settings = settings or NewtonSettings()
+        self.timer = timer or Timer()
+        self.A = compat.create_matrix(model.jacobian_form)
+        self.b = compat.create_vector(model.residual_form)
+        self.ksp = PETSc.KSP().create(model.comm)
+        self.ksp.setOperators(self.A)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType("mumps")
+        ls = self.settings.line_search
+        if ls is None:
+            ls = any(item.kind == "contact" for item in model.items)
+        self.line_search = {True: "residual", False: None, "none": None}.get(ls, ls)
+        if self.line_search not in (None, "residual", "energy"):
+            raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")
+        if self.settings.scale not in ("initial", "force"):
+            raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
+        self._b_old = self.b.duplicate()
+        self._f = self.b.duplicate()
+        self.factorised = False            # the KSP holds the LU factors of a tangent
+        self.residual_scale = 0.0
+        self.history: list[tuple[float, float]] = []
+
+    def residual(self) -> float:
+        """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm."""
+        m, b = self.model, self.b
+        with self.timer("stress update"):
+            m.evaluate_stress()
+        with self.timer("assembly"):
+            compat.assemble_vector(b, m.residual_form, m.jacobian_form, m.bcs, compat.petsc_vec(m.u),
+                                   add=m.nodal_loads())
+            b.scale(-1.0)
+        return b.norm()
+
+    def _solve_linear(self) -> str | None:
+        """Solve J du = -R into model.du; None, or why it failed (the same on every rank: an error
+        raised on one rank's part of the solve becomes every rank's failure)."""
+        err = None
+        try:
+            self.ksp.solve(self.b, compat.petsc_vec(self.model.du))
+        except PETSc.Error as e:
+            err = e
+        failure = first_failure(self.model.comm, err)
+        if failure is None:
+            reason = self.ksp.getConvergedReason()
+            if reason < 0:
+                failure = f"the linear solver failed (PETSc KSP reason {reason})"
+        if failure is not None:
+            self.factorised = False
+            return f"linear solve: {failure}"
+        self.model.du.x.scatter_forward()
+        return None
+
+    def force_scale(self) -> float:
+        """||F_int|| at the current iterate (stress of the last residual evaluation): the forces
+        the body carries, reactions and contact forces included."""
+        f = self._f
+        compat.assemble_vector(f, self.model.internal_force_form)
+        return f.norm()
+
+    def _converged(self, rnorm: float) -> bool:
+        """The residual test; with scale "force" against ||F_int|| of the current iterate."""
+        s = self.settings
+        if s.scale == "force":
+            with self.timer("assembly"):
+                self.residual_scale = self.force_scale()
+        return rnorm <= s.rtol * self.residual_scale + s.atol
+
+    def solve(self) -> tuple[bool, int, str]:
+        """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""
+        m, s = self.model, self.settings
+        self.history = []
+        try:
+            r0 = rnorm = self.residual()
+        except (InvertedElement, ReturnMapFailure) as err:
+            return False, 0, str(err)
+        if s.scale == "initial":
+            self.residual_scale = max(self.residual_scale, r0)
+        for it in range(1, s.max_it + 1):
+            if self._converged(rnorm):
+                return True, it - 1, "converged"
+            with self.timer("assembly"):
+                compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
+            with self.timer("solve"):
+                failure = self._solve_linear()
+            if failure is not None:
+                return False, it, failure
+            self.factorised = True
+            dnorm = compat.petsc_vec(m.du).norm()
+            if not np.isfinite(dnorm):
+                return False, it, "the Newton correction is not finite (singular tangent?)"
+            if self.line_search == "energy":
+                self.b.copy(self._b_old)
+                rnorm, alpha, err = self._energy_search(rnorm)
+            else:
+                rnorm, alpha, err = self._line_search(rnorm, armijo=it > s.free_its)
+            if err is not None:
+                return False, it, str(err)
+            if alpha < 1.0:
+                log.info("    Newton %2d: step scaled by %g", it, alpha)
+            self.history.append((rnorm, dnorm))
+            log.info("    Newton %2d: |R| = %.3e (rel %.1e), |du| = %.3e", it, rnorm,
+                     rnorm / max(self.residual_scale, 1e-300), dnorm)
+            if not np.isfinite(rnorm) or rnorm > s.divergence * max(r0, s.atol):
+                return False, it, f"diverged (|R| = {rnorm:.3e})"
+            if alpha == 1.0 and dnorm <= s.stol * compat.petsc_vec(m.u).norm():
+                return True, it, "converged"
+        converged = self._converged(rnorm)
+        return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
+
+    def load_rate(self, t: float, rate: fem.Function, eps: float) -> bool:
+        """The path's tangent at the current state and load factor t into ``rate``: K v = -dR/dt with
+        the last factorised tangent K and dR/dt = (R(t + eps) - R(t)) / eps; False (rate untouched)
+        before any factorisation or if the state cannot be evaluated."""
+        if not self.factorised:
+            return False
+        m = self.model
+        rhs = self._b_old
+        try:
+            with self.timer("predictor"):
+                m.set_load(t + eps)
+                self.residual()
+                self.b.copy(rhs)
+                m.set_load(t)
+                self.residual()
+                rhs.axpy(-1.0, self.b)          # b = -R: rhs = -(R(t + eps) - R(t))
+                rhs.scale(1.0 / eps)
+                err = None
+                try:
+                    self.ksp.solve(rhs, compat.petsc_vec(rate))
+                except PETSc.Error as e:
+                    err = e
+                if first_failure(m.comm, err) is not None or self.ksp.getConvergedReason() < 0:
+                    return False
+                rate.x.scatter_forward()
+        except (InvertedElement, ReturnMapFailure):
+            m.set_load(t)
+            return False
+        return bool(m.comm.allreduce(bool(np.all(np.isfinite(rate.x.array))), op=MPI.LAND))
