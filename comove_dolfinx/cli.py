@@ -1,6 +1,7 @@
 """The ``comove`` command.
 
     comove run SCENE --out DIR [--set key=value ...] [-v] [--no-progress]
+    comove run PROBLEM.toml --out DIR [-v] [--no-progress]
     comove scenes
 """
 from __future__ import annotations
@@ -71,13 +72,46 @@ def _errors():
     return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError)
 
 
+def run_problem(path, out_dir, comm=None, progress: bool = False):
+    """Run a problem file (problem.py) into ``out_dir``, with the writers of the scenes."""
+    import pathlib
+
+    from mpi4py import MPI
+
+    from . import problem
+    from .io import XDMF, Console, HistoryCSV, RunInfo
+    from .parallel import on_root
+
+    comm = comm or MPI.COMM_WORLD
+    data = problem.read(path)
+    out = pathlib.Path(out_dir)
+    on_root(comm, out.mkdir, parents=True, exist_ok=True)
+    writers = [HistoryCSV(out / "history.csv"), XDMF(out / "results.xdmf"),
+               RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem)]
+    return problem.build(data, comm, writers).run(progress=progress)
+
+
 def _run(args) -> int:
     from mpi4py import MPI
 
     from .presets import get_scene
+    from .problem import ProblemError
 
     comm = MPI.COMM_WORLD
-    errors = _errors()
+    errors = _errors() + (ProblemError,)
+    if args.scene.endswith(".toml"):
+        if args.set:
+            print("comove: --set applies to scenes; edit the problem file instead", file=sys.stderr)
+            return 2
+        if args.verbose:
+            _verbose(comm)
+        try:
+            result = run_problem(args.scene, args.out, progress=not args.no_progress)
+        except errors as err:
+            if comm.rank == 0:
+                print(f"comove: {err}", file=sys.stderr)
+            return 2
+        return 0 if result.completed else 1
     try:
         scene = get_scene(args.scene, args.set)
     except errors as err:
@@ -98,10 +132,10 @@ def _run(args) -> int:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="comove", description="Large deformation of solids pressed against rigid obstacles "
-        "by the co-moving S-R method (dolfinx 0.5.2).")
+        "by the co-moving S-R method.")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="run a scene")
-    run.add_argument("scene", help="scene name (see 'comove scenes')")
+    run = sub.add_parser("run", help="run a scene or a problem file")
+    run.add_argument("scene", help="scene name (see 'comove scenes') or a problem file (.toml, docs/api.md)")
     run.add_argument("--out", required=True, help="output folder")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene parameter (repeatable)")

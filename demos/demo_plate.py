@@ -12,6 +12,7 @@
 
 # %%
 import argparse
+import logging
 import pathlib
 import sys
 
@@ -30,6 +31,7 @@ parser.add_argument("--size", type=float, default=0.25, help="mesh size [cm]")
 args = parser.parse_args()
 out = pathlib.Path(args.out)
 comm = MPI.COMM_WORLD
+logging.disable(logging.INFO)                 # the form compiler's messages
 
 # %% [markdown]
 # ## The problem (cm, kgf)

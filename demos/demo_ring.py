@@ -12,6 +12,7 @@
 
 # %%
 import argparse
+import logging
 import pathlib
 import sys
 
@@ -32,6 +33,7 @@ parser.add_argument("--law", default="j2", choices=("j2", "chen"))
 args = parser.parse_args()
 out = pathlib.Path(args.out)
 comm = MPI.COMM_WORLD
+logging.disable(logging.INFO)                 # the form compiler's messages
 
 # %% [markdown]
 # ## The problem

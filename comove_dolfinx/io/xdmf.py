@@ -1,4 +1,4 @@
-"""Fields per converged increment in XDMF (+ HDF5) for ParaView; time = the job's load column.
+"""Fields per converged increment in XDMF (+ HDF5) for ParaView; time = the job's time column.
 
 ``displacement`` (exact: the mesh geometry has the displacement's degree, so every P2 node is written),
 ``cauchy_stress`` (3x3, cell averages, index 2 = out-of-plane / hoop), ``von_mises`` (cell averages),
@@ -93,7 +93,7 @@ class XDMF(Writer):
             funcs.append(c.pressure)
             if c.mu > 0:
                 funcs.append(c.shear)
-        t = row["load"]
+        t = row["time"]                 # increasing (the load may go down and up again)
         for f in funcs:
             self.file.write_function(f, t)
 

@@ -7,7 +7,8 @@ the tangent Newton factorised last (the algorithmic tangent of the increment jus
 plastic points keep loading) and dR/dt a forward difference in the load factor; one
 back-substitution, no new factorisation, so it is not counted as a Newton iteration. Unlike an
 extrapolation it knows where the path is heading at t_n, not where it came from; the first
-increment, before any factorisation, starts from the unloaded state.
+increment of a job, before any factorisation, starts from the unloaded state, the first of a later
+step from the tangent at the state where the step before ended.
 An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
 ``divergence`` over the increment's first fails the increment; the loop then restores the last
 converged state and halves the increment, down to the smallest increment dt_nom / 2^max_cutbacks;
@@ -151,6 +152,10 @@ class IncrementalSolver:
         # the tangent keeps the last two states: its fallback is the linear extrapolation (the chord)
         order = 1 if tangent else int(st.predictor)
         rate, have_rate = fem.Function(m.V) if tangent else None, False
+        if tangent and self.newton.factorised:
+            # a later step of a job: the path's tangent at the state where the last step ended
+            # (e.g. the elastic unloading when an obstacle starts to withdraw)
+            have_rate = self.newton.load_rate(0.0, rate, 1e-6 * st.t_end)
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
         while t < st.t_end - tol:
