@@ -23,7 +23,8 @@ import time
 
 from mpi4py import MPI
 
-from .scenes import get_scene
+from .mechanics.model import Model
+from .presets import get_scene
 from .solver import IncrementalSolver, StepSettings
 
 # lam = 5: v/L and (L - x_tip)/L of the inextensible elastica (theory.md 7.1)
@@ -41,18 +42,21 @@ def _write_csv(path: pathlib.Path, rows: list[dict]) -> None:
 
 def elastica(out: pathlib.Path, updates=None, steps=(1, 2, 3, 4, 5, 10, 20)) -> list[dict]:
     """Tip-deflection error at lam = 5 and wall time against the number of equal increments."""
-    from .updates import UPDATES
+    from .mechanics.updates import UPDATES
     rows = []
     for name in updates or list(UPDATES):
         for n in steps:
             scene = get_scene("elastica", [f"update={name}", f"n_steps={n}"])
-            model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+            body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
+            model = Model(body, items)
             model.finalize()
+            tip = probes[0]
+            tip.attach(model)
             solver = IncrementalSolver(model, StepSettings(n_steps=n, max_cutbacks=0))
             t0 = time.perf_counter()
             res = solver.run()
             wall = time.perf_counter() - t0
-            ux, uy = scene.history_row(model).values()
+            ux, uy = tip(model).values()
             done = res.completed
             rows.append({"update": name, "increments": n, "converged": int(done),
                          "tip_deflection": -uy if done else float("nan"),
@@ -105,7 +109,7 @@ def _run(name: str, sets: list[str], out: pathlib.Path, tag: str,
     out/runs/<tag>; (run.json, history rows)."""
     import json
 
-    from .job import run_scene
+    from .cli import run_scene
     scene = get_scene(name, sets)
     folder = out / "runs" / tag
     run_scene(scene, folder, progress=False, newton=newton)
@@ -172,14 +176,14 @@ def _p_against(hist: list[dict], ref: list[dict]) -> dict:
 
 
 def _split(hist: list[dict]) -> float:
-    from .scenes import split_delta
+    from .presets import split_delta
     d = split_delta(*([r[k] for r in hist] for k in ("load", "crown_gap", "contact_width")))
     return float("nan") if d is None else d
 
 
 def ring(out: pathlib.Path, factors=(1.0, 0.5, 2.0)) -> list[dict]:
     """The whole crush at the scene defaults and at half and twice the mesh size."""
-    from .scenes import Ring
+    from .presets import Ring
     rows, curves = [], {}
     for f in factors:
         size = Ring.size * f
@@ -216,7 +220,7 @@ def ring_steps(out: pathlib.Path, steps=RING_STEPS) -> list[dict]:
     scene's default increments with the pressure re-lagged to true Coulomb (relag=true); and Chen's
     single-parameter rate law (law=chen) at 1, 4 and 16 times the default increments, against the
     same J2 reference."""
-    from .scenes import Ring
+    from .presets import Ring
     runs = [(f"lagged_n{n}", [f"n_steps={n}"]) for n in steps]
     runs.append((f"coulomb_n{Ring.n_steps}", [f"n_steps={Ring.n_steps}", "relag=true"]))
     runs += [(f"chen_n{k * Ring.n_steps}", [f"n_steps={k * Ring.n_steps}", "law=chen"])
@@ -282,7 +286,7 @@ def ring_tolerance(out: pathlib.Path, steps=RING_TOLERANCE_STEPS, rtols=RING_TOL
     when its deviation stays well below it."""
     import dataclasses
 
-    from .scenes import Ring
+    from .presets import Ring
     base = Ring().newton_settings()
     rows = []
     for n in steps:

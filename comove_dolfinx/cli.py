@@ -35,9 +35,9 @@ def _verbose(comm) -> None:
     logging.getLogger().setLevel(logging.WARNING)
 
 
-def run_scene(scene, out_dir, comm=None, progress: bool = False):
+def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None):
     """Run a preset ``scene`` into ``out_dir`` (history.csv, results.xdmf, run.json, the console's
-    lines); returns the :class:`Results`."""
+    lines); returns the :class:`Results`. ``newton``: settings instead of the scene's."""
     import dataclasses
     import pathlib
 
@@ -57,6 +57,8 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False):
                RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
                Console(scene.name, scene.columns)]
     job = scene.job(md, writers)
+    if newton is not None:
+        job.newton = newton
     return job.run(progress=progress)
 
 

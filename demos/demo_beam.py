@@ -20,7 +20,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
 import comove_dolfinx as cm  # noqa: E402
