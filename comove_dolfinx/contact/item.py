@@ -128,7 +128,7 @@ class Contact(Item):
                 p_lag = laws.positive_part(ufl.dot(obs.normal(x_lag, d_lag), ctx.facet_traction(N, self.u_lag))
                                            - gamma * g_lag)
             s = self.mu * p_lag
-            slip = ufl.dot(t_o, (u - u_n) - (obs._d - self._d_n))
+            slip = ufl.dot(t_o, (u - u_n) - (obs.d - self._d_n))
             if self.method == "penalty":
                 self.e_n = fem.Function(compat.function_space(msh, "Lagrange", ctx.degree), name="stick_slip")
                 Rt, self.q_ref, trial, self._e_new = laws.penalty_friction(slip, self.e_n, s, t_o, v, gamma)

@@ -33,7 +33,7 @@ class Obstacle:
         if motion is not None and not callable(motion):
             motion = _vector("motion", motion)
         self.motion = motion
-        self._d = None
+        self.d = None          # its current displacement (a Constant, once bound to a mesh)
 
     def displacement(self, factor: float) -> np.ndarray:
         """Rigid displacement of the obstacle at its item's factor."""
@@ -44,11 +44,11 @@ class Obstacle:
         return factor * self.motion
 
     def bind(self, mesh) -> None:
-        if self._d is None:
-            self._d = fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
+        if self.d is None:
+            self.d = fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
 
     def set(self, factor: float) -> None:
-        self._d.value = self.displacement(factor)
+        self.d.value = self.displacement(factor)
 
     # UFL (current position x; d the obstacle's displacement, default the current one) and NumPy
     # (positions (N, 2), displacement d)
@@ -74,7 +74,7 @@ class Plane(Obstacle):
         self.n = n / np.linalg.norm(n)
 
     def gap(self, x, d=None):
-        d = self._d if d is None else d
+        d = self.d if d is None else d
         return ufl.dot(x - ufl.as_vector(self.point) - d, ufl.as_vector(self.n))
 
     def normal(self, x, d=None):
@@ -95,7 +95,7 @@ class Circle(Obstacle):
         self.radius = float(radius)
 
     def _rel(self, x, d):
-        return x - ufl.as_vector(self.center) - (self._d if d is None else d)
+        return x - ufl.as_vector(self.center) - (self.d if d is None else d)
 
     def gap(self, x, d=None):
         r = self._rel(x, d)
@@ -131,7 +131,7 @@ class Profile(Obstacle):
 
     def _nearest(self, x, d):
         """Nearest point of the polyline to x (UFL): the segments' nearest points, the closest kept."""
-        d = self._d if d is None else d
+        d = self.d if d is None else d
         best, best_d2 = None, None
         for a, b in self.segments:
             a_, ab = ufl.as_vector(a) + d, b - a

@@ -1,0 +1,30 @@
+"""Gmsh builders for the 2D bodies of the scenes, cached as .msh files and loaded distributed.
+
+Every builder makes a triangle mesh in the (x, y) plane (gdim = 2; for the axisymmetric plate x is the
+radius r and y the axial coordinate z) with straight-sided (order 1) or curved (order 2, mid-side nodes on
+the true arcs) triangles. Lengths are in the user's units (the scenes use cm).
+
+Physical groups: one surface group "body" (cell tag ``BODY_TAG``) and one named curve group per boundary
+part; their tag values, distinct per name and numbered from 1 in the order listed by each builder, are in
+``MeshData.tags`` and are used as ``ds(data.ds_id("top"))`` with
+``ufl.Measure("ds", domain=data.mesh, subdomain_data=data.facet_tags)``.
+
+Caching: rank 0 builds the mesh once and writes ``<cache_dir>/<builder>_<hash>.msh``, where the hash
+covers every parameter (order included) and the gmsh version; the file is written under a temporary name
+and renamed, so a concurrent reader never sees half a file. Later calls, in any process, reuse the file.
+
+Gmsh runs on rank 0 only: the builders call ``gmsh.initialize``/``gmsh.finalize`` there, so do not call
+them from inside a gmsh session of your own.
+"""
+from .builders import annulus_sector, plate_section, quarter_disc, rectangle
+from .meshes import (
+           BODY_TAG,
+           MeshData,
+           MeshError,
+           fix_coordinate_element,
+           from_dolfinx,
+           load_msh,
+)
+
+__all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "fix_coordinate_element", "from_dolfinx",
+           "load_msh", "plate_section", "quarter_disc", "rectangle"]

@@ -1,0 +1,217 @@
+"""Mesh data with named boundaries: reading .msh files, wrapping dolfinx meshes, the builders' cache."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pathlib
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+import dolfinx
+import gmsh
+import numpy as np
+from mpi4py import MPI
+
+from .. import compat
+
+BODY_TAG = 1
+"""Cell tag value of the physical surface "body" written by every builder."""
+
+_CACHE_FORMAT = 1  # bump when a builder changes the meshes it writes, to invalidate old cache files
+_ARRANGEMENT = "AlternateLeft"  # diagonals of structured triangles alternate, no preferred direction
+
+
+class MeshError(ValueError):
+    """A mesh file or a physical group is missing or unusable; the message names it and the fix."""
+
+
+@dataclass
+class MeshData:
+    """A distributed dolfinx mesh with its cell and facet tags and the names of its facet groups.
+
+    Attributes
+    ----------
+    mesh : dolfinx.mesh.Mesh
+        The mesh (gdim = 2), already passed through `fix_coordinate_element`.
+    cell_tags, facet_tags : dolfinx.mesh.MeshTags
+        Tags of the physical surfaces and curves of the .msh file.
+    tags : dict[str, int]
+        Facet (curve) physical-group name -> tag value.
+    path : pathlib.Path
+        The .msh file the mesh was read from.
+    cell_names : dict[str, int]
+        Cell (surface) physical-group name -> tag value ({"body": 1} for the builders).
+    """
+
+    mesh: dolfinx.mesh.Mesh
+    cell_tags: dolfinx.mesh.MeshTags
+    facet_tags: dolfinx.mesh.MeshTags
+    tags: dict[str, int]
+    path: pathlib.Path
+    cell_names: dict[str, int] = field(default_factory=dict)
+
+    def ds_id(self, name: str) -> int:
+        """Return the facet tag value of the physical group `name` (MeshError if there is none)."""
+        try:
+            return self.tags[name]
+        except KeyError:
+            raise MeshError(f"{self.path}: no facet group named {name!r}; available: "
+                            f"{sorted(self.tags)}") from None
+
+
+def fix_coordinate_element(mesh: dolfinx.mesh.Mesh) -> None:
+    """Make the mesh's form cache keys stable from its first compilation on (see
+    :func:`compat.fix_coordinate_element`; dolfinx 0.5 only, a no-op later). Meshes read from Gmsh
+    already carry the variant; those of ``dolfinx.mesh.create_rectangle`` and friends do not."""
+    compat.fix_coordinate_element(mesh)
+
+
+def _cache_path(builder: str, params: dict, cache_dir: str | os.PathLike) -> pathlib.Path:
+    """File name <builder>_<10-hex hash of parameters, gmsh version and cache format>.msh."""
+    key = json.dumps({"builder": builder, "params": params, "gmsh": gmsh.__version__,
+                      "format": _CACHE_FORMAT}, sort_keys=True)
+    digest = hashlib.sha1(key.encode()).hexdigest()[:10]
+    return pathlib.Path(cache_dir) / f"{builder}_{digest}.msh"
+
+
+def _start_gmsh() -> None:
+    """Initialize gmsh without user configuration files and with terminal output off."""
+    gmsh.initialize(readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 0)  # errors still raise, with gmsh's message
+
+
+def _add_group(dim: int, entities: list[int], tag: int, name: str) -> None:
+    """Add the physical group `tag` of dimension `dim` with the given name."""
+    gmsh.model.addPhysicalGroup(dim, entities, tag)  # gmsh 4.8: no name argument yet
+    gmsh.model.setPhysicalName(dim, tag, name)
+
+
+def _build(builder: str, params: dict, construct: Callable[[], None], comm: MPI.Comm,
+           cache_dir: str | os.PathLike) -> MeshData:
+    """Write the mesh on rank 0 unless its cache file exists, then read it on every rank.
+
+    `construct` creates the geometry, the physical groups and the mesh-size settings of the current
+    gmsh model (and synchronizes); this function meshes it, raises its order and writes the file.
+    """
+    path = _cache_path(builder, params, cache_dir)
+    error = None
+    if comm.rank == 0 and not path.exists():
+        tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.msh")  # gmsh wants the .msh suffix
+        _start_gmsh()
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            gmsh.model.add(builder)
+            construct()
+            gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.setOrder(params["order"])  # order 2: new nodes on the true curves
+            gmsh.write(str(tmp))
+            os.replace(tmp, path)
+        except Exception as err:  # gmsh raises plain Exception
+            error = f"building {path} with gmsh failed: {err}"
+        finally:
+            gmsh.finalize()
+            if tmp.exists():
+                tmp.unlink()
+    error = comm.bcast(error, root=0)  # also the barrier: no rank reads before the file exists
+    if error is not None:
+        raise MeshError(error)
+    return load_msh(path, comm)
+
+
+def _groups_of_current_model(path: pathlib.Path, required: Iterable[str]) -> tuple[dict, dict]:
+    """Facet and cell physical groups (name -> tag) of the merged file; MeshError if unusable."""
+    groups = gmsh.model.getPhysicalGroups()
+    if not groups:
+        raise MeshError(f"{path} has no physical groups; tag the body surface and the boundary curves "
+                        "(Physical Surface / Physical Curve) before saving the mesh")
+    top = max(dim for dim, _ in groups)
+    if top != 2:
+        raise MeshError(f"{path}: the highest physical group dimension is {top}; comove_dolfinx reads "
+                        "2D meshes with a physical surface for the body (and curves for boundaries)")
+    names: dict[int, dict[str, int]] = {1: {}, 2: {}}
+    for dim, tag in groups:
+        if dim in names:
+            names[dim][gmsh.model.getPhysicalName(dim, tag) or str(tag)] = tag
+    # model_to_mesh asserts one element type per entity on rank 0 only: check here to avoid a deadlock
+    for dim in (1, 2):
+        entities = [e for d, tag in groups if d == dim for e in gmsh.model.getEntitiesForPhysicalGroup(d, tag)]
+        types = {t for e in entities for t in gmsh.model.mesh.getElementTypes(dim, e)}
+        if len(types) > 1:
+            raise MeshError(f"{path} mixes element types {sorted(types)} in its {dim}D physical groups; "
+                            "dolfinx 0.5 needs one cell type (all triangles or all quadrilaterals)")
+    z = gmsh.model.mesh.getNodes()[1][2::3]
+    if z.size and np.abs(z).max() > 0:
+        raise MeshError(f"{path} is not in the plane z = 0 (max |z| = {np.abs(z).max():g}); "
+                        "comove_dolfinx reads 2D (x, y) meshes")
+    missing = [name for name in required if name not in names[1]]
+    if missing:
+        raise MeshError(f"{path}: facet group(s) {missing} not found; present: {sorted(names[1])}. "
+                        "Add them as named physical curves or fix the names asked for")
+    return names[1], names[2]
+
+
+def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
+             required: Iterable[str] = ()) -> MeshData:
+    """Read a 2D gmsh .msh file on rank 0 and distribute it over `comm`.
+
+    Parameters
+    ----------
+    path
+        The .msh file (any gmsh-readable version with physical groups).
+    comm
+        Communicator of the mesh.
+    required
+        Facet (physical curve) names that must be present.
+
+    Raises
+    ------
+    MeshError
+        If the file is missing or unreadable, has no physical groups or no physical surface, or lacks a
+        required facet group (the message names the missing groups and lists those present).
+    """
+    path = pathlib.Path(path)
+    required = tuple(required)
+    error, facet_names, cell_names = None, {}, {}
+    if comm.rank == 0:
+        if not path.is_file():
+            error = f"mesh file {path} not found (absolute: {path.resolve()}); check the path"
+        else:
+            _start_gmsh()
+            try:
+                gmsh.model.add("comove_load")
+                gmsh.merge(str(path))
+                facet_names, cell_names = _groups_of_current_model(path, required)
+            except MeshError as err:
+                error = str(err)
+            except Exception as err:
+                error = f"gmsh cannot read {path}: {err}"
+            if error is not None:
+                gmsh.finalize()
+    error, facet_names, cell_names = comm.bcast((error, facet_names, cell_names), root=0)
+    if error is not None:
+        raise MeshError(error)
+    # dolfinx 0.5.2's gmshio.read_from_msh is broken (NameError: 'msh' on the reading rank,
+    # 'partitioner' elsewhere), so do what it should: merge on rank 0, then model_to_mesh everywhere.
+    try:
+        mesh, cell_tags, facet_tags = compat.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+    finally:
+        if comm.rank == 0:
+            gmsh.finalize()
+    fix_coordinate_element(mesh)
+    mesh.name = "mesh"
+    cell_tags.name, facet_tags.name = "cell_tags", "facet_tags"
+    return MeshData(mesh, cell_tags, facet_tags, facet_names, path, cell_names)
+
+
+def from_dolfinx(mesh: dolfinx.mesh.Mesh, facet_tags: dolfinx.mesh.MeshTags, names: dict[str, int],
+                 cell_tags: dolfinx.mesh.MeshTags | None = None) -> MeshData:
+    """A mesh made with dolfinx, with its facet tags and a name for each tag value used."""
+    if mesh.geometry.dim != 2 or mesh.topology.dim != 2:
+        raise MeshError("the mesh must be 2D (gdim = tdim = 2)")
+    present = set(np.unique(facet_tags.values).tolist())
+    present = set().union(*mesh.comm.allgather(present))
+    missing = {k: v for k, v in names.items() if v not in present}
+    if missing:
+        raise MeshError(f"no facet carries the tag value of {missing}: tag those facets or drop the names")
+    return MeshData(mesh, cell_tags, facet_tags, dict(names), pathlib.Path("<dolfinx mesh>"))
