@@ -4,9 +4,9 @@ import csv
 import launch
 import pytest
 
-from comove_dolfinx.job import run_scene
-from comove_dolfinx.scenes import get_scene
-from comove_dolfinx.updates import UPDATES
+from comove_dolfinx.cli import run_scene
+from comove_dolfinx.mechanics.updates import UPDATES
+from comove_dolfinx.presets import get_scene
 
 # lam: (v/L, (L - x_tip)/L) of the inextensible elastica, theory.md 7.1
 ELASTICA = {1.0: (0.30172, 0.05643), 2.0: (0.49346, 0.16064), 5.0: (0.71379, 0.38763)}

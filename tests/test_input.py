@@ -2,8 +2,8 @@
 import pytest
 
 from comove_dolfinx import cli
-from comove_dolfinx.materials import Elastic, MaterialError
-from comove_dolfinx.scenes import SceneError, get_scene
+from comove_dolfinx.mechanics.material_data import Elastic, MaterialError
+from comove_dolfinx.presets import SceneError, get_scene
 
 
 @pytest.mark.parametrize("pairs, words", [

@@ -17,15 +17,17 @@ COMMON = """
 import logging, sys
 logging.disable(logging.INFO)
 from mpi4py import MPI
-from comove_dolfinx import geometry, materials
-from comove_dolfinx.materials import Elastic, Hardening
-from comove_dolfinx.model import Model, Plasticity
+from comove_dolfinx import geometry
+from comove_dolfinx.loads import Displacement, Fixed
+from comove_dolfinx.mechanics import return_maps
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.materials import J2, Hardening
+from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 comm = MPI.COMM_WORLD
 md = geometry.rectangle(1.0, 0.5, 0.125, order=2, comm=comm, cache_dir=sys.argv[1])
-m = Model(md, "plane_strain", Elastic(1000.0, 0.3), plasticity=Plasticity(Hardening.linear(15.0, 100.0)))
-m.fix("left")
-m.fix("right", value=(0.05, 0.02))
+body = Body(md, "plane_strain", J2(1000.0, 0.3, Hardening.linear(15.0, 100.0)))
+m = Model(body, [Fixed("left"), Displacement("right", (0.05, 0.02))])
 m.finalize()
 solver = IncrementalSolver(m, StepSettings(n_steps=3, max_cutbacks=2))
 def report(text):
@@ -36,13 +38,13 @@ def report(text):
 
 RETURN_MAP = COMMON + """
 calls = [0]
-j2 = materials.j2_return
+j2 = return_maps.j2_return
 def flaky(*args, **kw):
     calls[0] += 1
     if comm.rank == 1 and 4 <= calls[0] <= 9:      # longer than the step halvings of Newton
         raise RuntimeError("injected return-map failure")
     return j2(*args, **kw)
-materials.j2_return = flaky
+return_maps.j2_return = flaky
 res = solver.run()
 report(f"completed={res.completed} increments={len(res.increments)} "
        f"cutbacks={sum(i.cutbacks for i in res.increments)}")

@@ -19,9 +19,11 @@ import pytest
 from mpi4py import MPI
 
 from comove_dolfinx import geometry
-from comove_dolfinx.materials import Elastic, Hardening
-from comove_dolfinx.model import Model, Plasticity
-from comove_dolfinx.scenes import RING_HARDENING, parse_table
+from comove_dolfinx.loads import Displacement, Fixed
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.materials import J2, Elastic, Hardening
+from comove_dolfinx.mechanics.model import Model
+from comove_dolfinx.presets.scenes import RING_HARDENING, parse_table
 from comove_dolfinx.solver import IncrementalSolver, NewtonSettings, StepSettings
 
 E, NU = 1.89e6, 0.3
@@ -32,10 +34,9 @@ def test_strip_tension_follows_the_table_with_its_thickness(mpi_tmp):
     L, h, stretch = 2.0, 0.5, 1.05
     table = parse_table(RING_HARDENING)
     md = geometry.rectangle(L, h, 0.25, order=2, comm=MPI.COMM_WORLD, cache_dir=str(mpi_tmp))
-    m = Model(md, "plane_stress", Elastic(E, NU), plasticity=Plasticity(table))
-    m.fix("left", component=0)
-    m.fix("bottom", component=1)
-    m.fix("right", component=0, value=(stretch - 1.0) * L)
+    items = [Fixed("left", component=0), Fixed("bottom", component=1),
+             Displacement("right", (stretch - 1.0) * L, component=0)]
+    m = Model(Body(md, "plane_stress", J2(E, NU, table)), items)
     m.finalize()
     res = IncrementalSolver(m, StepSettings(n_steps=10)).run()
     assert res.completed, res.message
@@ -72,8 +73,7 @@ def _bending_moment(kind, cache_dir):
     kappa = 40.0 * k * s0 / Ep / (t / 2)                    # elastic core 1/40 of the half depth
     theta = kappa * L
     md = geometry.rectangle(L, t, t / 8, order=2, comm=MPI.COMM_WORLD, cache_dir=cache_dir)
-    m = Model(md, kind, el, plasticity=Plasticity(Hardening.perfect(s0)))
-    m.fix("left", component=0)                 # symmetry; free in y, so no shear force
+    fixed = Fixed("left", component=0)         # symmetry; free in y, so no shear force
     c = np.array([L, t / 2])
 
     def rotation(x, s):
@@ -82,7 +82,8 @@ def _bending_moment(kind, cache_dir):
         return np.vstack([(math.cos(a) - 1) * dx - math.sin(a) * dy,
                           math.sin(a) * dx + (math.cos(a) - 1) * dy])
 
-    m.prescribe("right", rotation)
+    m = Model(Body(md, kind, J2(el.E, el.nu, Hardening.perfect(s0))),
+              [fixed, Displacement("right", field=rotation)])
     m.finalize()
     res = IncrementalSolver(m, StepSettings(n_steps=8, predictor="tangent"),
                             NewtonSettings(line_search="energy")).run()

@@ -7,8 +7,10 @@ import pytest
 from mpi4py import MPI
 
 from comove_dolfinx import geometry
-from comove_dolfinx.materials import Elastic, Hardening
-from comove_dolfinx.model import Model, Plasticity
+from comove_dolfinx.loads import Fixed, Pressure
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.materials import Hardening, as_material
+from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 
 
@@ -23,7 +25,7 @@ def test_rigid_rotation_keeps_plastic_state(tmp_path, law, update):
     rigid increments: the stress turns with it exactly and the plastic strain does not grow."""
     md = geometry.rectangle(1.0, 1.0, 0.5, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
     hard = Hardening((0.0, 0.05), (1.0, 1.5))
-    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), update=update, plasticity=Plasticity(hard, law))
+    m = Model(Body(md, "plane_strain", as_material(1000.0, 0.3, law, hard), update=update))
     m.finalize()
     F = np.diag([1.02, 0.99])
     states = []
@@ -53,11 +55,9 @@ def test_thick_cylinder_limit_pressure(mpi_tmp, update):
     a, b, s0 = 1.0, 2.0, 1.0
     p_lim = 2.0 / math.sqrt(3.0) * s0 * math.log(b / a)
     md = geometry.annulus_sector(a, b, 0.25, order=2, comm=MPI.COMM_WORLD, cache_dir=str(mpi_tmp))
-    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), update=update,
-              plasticity=Plasticity(Hardening.perfect(s0)))
-    m.fix("xsym", component=0)
-    m.fix("ysym", component=1)
-    m.follower_pressure("inner", 1.05 * p_lim)
+    items = [Fixed("xsym", component=0), Fixed("ysym", component=1), Pressure("inner", 1.05 * p_lim)]
+    m = Model(Body(md, "plane_strain", as_material(1000.0, 0.3, "j2", Hardening.perfect(s0)), update=update),
+              items)
     m.finalize()
     res = IncrementalSolver(m, StepSettings(n_steps=10, max_cutbacks=6)).run()
     assert not res.completed                                 # 5 % above the limit: no equilibrium

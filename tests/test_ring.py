@@ -5,8 +5,8 @@ import math
 
 import pytest
 
-from comove_dolfinx.job import run_scene
-from comove_dolfinx.scenes import get_scene, split_delta
+from comove_dolfinx.cli import run_scene
+from comove_dolfinx.presets import get_scene, split_delta
 
 COARSE = ["size=0.3"]
 

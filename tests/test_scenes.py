@@ -4,8 +4,8 @@ that is never reached, and the elastica's accuracy with few large increments (is
 import pytest
 from test_elastica import ELASTICA, _cli, read_history
 
-from comove_dolfinx.job import run_scene
-from comove_dolfinx.scenes import get_scene
+from comove_dolfinx.cli import run_scene
+from comove_dolfinx.presets import get_scene
 
 
 def test_beam_one_and_two_ranks_give_the_same_history(tmp_path):

@@ -6,7 +6,8 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from comove_dolfinx import compat
-from comove_dolfinx.scenes import get_scene
+from comove_dolfinx.mechanics.model import Model
+from comove_dolfinx.presets import get_scene
 from comove_dolfinx.solver import (
     IncrementalSolver,
     Newton,
@@ -17,6 +18,16 @@ from comove_dolfinx.solver import (
 
 # lam = 2 of the inextensible elastica (theory.md 7.1): v/L
 ELASTICA_2 = 0.49346
+
+
+def _elastica(overrides):
+    """The elastica scene's model (not finalised) and its tip probe, attached."""
+    scene = get_scene("elastica", overrides)
+    body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
+    model = Model(body, items)
+    tip = probes[0]
+    tip.attach(model)
+    return scene, model, tip
 
 
 def test_extrapolation_reproduces_polynomial_paths():
@@ -37,19 +48,17 @@ def test_energy_line_search_reaches_the_elastica(predictor):
     """The globalisation changes the path of the iterations, not the solution: with Crisfield's line
     search (and the linear or the tangent predictor) the elastica still lands on the closed form at
     lam = 2."""
-    scene = get_scene("elastica", ["lam=2", "n_steps=10"])
-    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    scene, model, tip = _elastica(["lam=2", "n_steps=10"])
     model.finalize()
     res = IncrementalSolver(model, StepSettings(n_steps=10, predictor=predictor),
                             NewtonSettings(line_search="energy")).run()
     assert res.completed, res.message
-    v = -scene.history_row(model)["tip_uy"] / scene.L
+    v = -tip(model)["tip_uy"] / scene.L
     assert v == pytest.approx(ELASTICA_2, rel=5e-3)
 
 
 def test_unknown_line_search_is_refused():
-    scene = get_scene("elastica", ["n_steps=1"])
-    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    _, model, _ = _elastica(["n_steps=1"])
     model.finalize()
     with pytest.raises(ValueError, match="'bogus'"):
         Newton(model, NewtonSettings(line_search="bogus"))
@@ -66,8 +75,7 @@ def test_tangent_predictor_is_the_derivative_of_the_path():
     the derivative of the path: the chords (u(t + h) - u(t)) / h of converged solutions approach it
     at first order in h (error halves with h; measured 4.5e-2 and 2.2e-2 of |v| for h = 0.1, 0.05, the
     same on two ranks)."""
-    scene = get_scene("elastica", ["lam=2", "n_steps=5"])
-    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    _, model, _ = _elastica(["lam=2", "n_steps=5"])
     model.finalize()
     solver = IncrementalSolver(model, StepSettings(n_steps=5, t_end=0.5), NewtonSettings())
     assert solver.run().completed
@@ -90,8 +98,7 @@ def test_tangent_predictor_is_the_derivative_of_the_path():
 def test_tangent_predictor_falls_back_to_the_chord():
     """A tangent that strays from the last chord by more than chord_tol (a spurious part along a
     near-mechanism) is not used: the check accepts 5 % and refuses 20 % with chord_tol = 0.1."""
-    scene = get_scene("elastica", ["n_steps=1"])
-    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    _, model, _ = _elastica(["n_steps=1"])
     model.finalize()
     solver = IncrementalSolver(model, StepSettings(predictor="tangent", chord_tol=0.1))
     rng = np.random.default_rng(1)
@@ -110,19 +117,18 @@ def test_force_scaled_convergence_balances_the_reaction():
     and F_int, the force scale, is what the body carries: its vertical components sum to zero (a
     constant is a rigid motion) and, at the clamp, to the reaction that balances the dead tip load P
     (equilibrium of the whole cantilever, to within rtol)."""
-    scene = get_scene("elastica", ["lam=2", "n_steps=10"])
-    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    scene, model, tip = _elastica(["lam=2", "n_steps=10"])
     model.finalize()
     solver = IncrementalSolver(model, StepSettings(n_steps=10), NewtonSettings(scale="force",
                                                                               rtol=1e-6))
     res = solver.run()
     assert res.completed, res.message
-    assert -scene.history_row(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)
+    assert -tip(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)
     newton = solver.newton
     f_norm = newton.force_scale()
     assert newton.residual() <= 1e-6 * f_norm
     V = model.V
-    clamp = fem.locate_dofs_topological(V.sub(1), 1, model._facets("left"))   # unrolled (y) dofs
+    clamp = fem.locate_dofs_topological(V.sub(1), 1, model.context().facets("left"))   # unrolled (y) dofs
     f = newton._f.array                                                         # owned entries
     owned = clamp[clamp < f.size]
     comm = MPI.COMM_WORLD

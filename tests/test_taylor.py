@@ -1,11 +1,12 @@
 """Taylor tests of the Jacobian: every residual term, at a deformed mid-increment state.
 
 A block (1 x 0.5; axisymmetric: at radius 0.5 to 1.5) with a follower pressure on its right face and a
-dead traction on its left face is pressed onto a rigid plane or circle by its top edge, which moves down
-and sideways (without contact, its bottom edge is held); two converged increments build the history
-(stress, plastic strain, friction), then the load goes on and one Newton correction gives the state
-tested: not converged, points yielding, the contact set partly sticking and partly slipping as each
-case asks. The remainder
+dead traction on its left face is pressed onto a rigid plane, circle or rounded polyline (Profile) by
+its top edge, which moves down and sideways, uniformly or along a displacement field (without contact,
+its bottom edge is held), in some cases with a point load or a body force too; two converged
+increments build the history (stress, plastic strain, friction), then the load goes on and one Newton
+correction gives the state tested: not converged, points yielding, the contact set partly sticking
+and partly slipping as each case asks. The remainder
 |R(u + h w) - R(u) - h J w| must fall as h^2 (observed order close to 2 between the smallest steps);
 a Jacobian that misses a dependence of the residual on u shows order 1. See comove_dolfinx.taylor.
 """
@@ -14,9 +15,12 @@ import pytest
 from mpi4py import MPI
 
 from comove_dolfinx import compat, geometry
-from comove_dolfinx.contact import Circle, Contact, Plane
-from comove_dolfinx.materials import Elastic, Hardening
-from comove_dolfinx.model import Model, Plasticity
+from comove_dolfinx.contact import Circle, Contact, Plane, Profile
+from comove_dolfinx.loads import BodyForce, Displacement, Fixed, PointLoad, Pressure, Traction
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.material_data import Hardening
+from comove_dolfinx.mechanics.materials import as_material
+from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 from comove_dolfinx.taylor import taylor_test
 
@@ -31,22 +35,47 @@ def meshes(tmp_path_factory):
             for x0 in (0.0, 0.5)}
 
 
+def _obstacle(obstacle, x0):
+    if obstacle == "plane":
+        return Plane((0.0, 0.0), (0.0, 1.0))
+    if obstacle == "circle":
+        return Circle((x0 + 0.5, -2.0), 2.0)
+    # a roof of two slopes (1 in 4) with its apex rounded to 0.2, touching the bottom edge at its
+    # middle: the contact set crosses from one segment to the other over the arc
+    return Profile([(x0 + 0.1, -0.3), (x0 + 0.5, -0.2), (x0 + 0.9, -0.3)], 0.2)
+
+
+def _top(x0, load):
+    """The top edge's motion: down and sideways, uniformly, or (load = "field") along a field that
+    also tilts the edge."""
+    if load != "field":
+        return Displacement("top", (0.06, -0.06))
+
+    def field(x, t):
+        return np.vstack([np.full_like(x[0], 0.06 * t), -0.06 * t * (1.0 + 0.5 * (x[0] - x0))])
+    return Displacement("top", field=field)
+
+
 def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty", theta=0,
-           friction="slip", obstacle="plane", gamma0=10.0):
-    """The model at the tested state, and its contact term (None without contact)."""
+           friction="slip", obstacle="plane", gamma0=10.0, load=None):
+    """The model at the tested state, and its contact term (None without contact). ``load``: an
+    extra item, "point" (a point load at a node of the right face), "body" (a body force), or
+    "field" (the top edge's motion as a displacement field)."""
     x0 = 0.5 if kind == "axisymmetric" else 0.0
-    plast = Plasticity(HARDENING, law) if law else None
-    m = Model(meshes[x0], kind, Elastic(1000.0, 0.3), update=update, plasticity=plast)
-    m.fix("top", value=(0.06, -0.06))
-    m.follower_pressure("right", 5.0)
-    m.dead_traction("left", (2.0, -1.0))
+    material = as_material(1000.0, 0.3, law, HARDENING)
+    items = [_top(x0, load), Pressure("right", 5.0), Traction("left", (2.0, -1.0))]
+    if load == "point":
+        items.append(PointLoad((x0 + 1.0, 0.25), (-1.0, -2.0)))
+    elif load == "body":
+        items.append(BodyForce((2.0, -10.0)))
     c = None
     if not method:
-        m.fix("bottom")                               # sheared between its top and bottom edges
+        items.append(Fixed("bottom"))                 # sheared between its top and bottom edges
     else:
-        obs = Plane((0.0, 0.0), (0.0, 1.0)) if obstacle == "plane" else Circle((x0 + 0.5, -2.0), 2.0)
-        c = Contact("bottom", obs, method=method, theta=theta, gamma0=gamma0, mu=FRICTION[friction])
-        m.boundary_terms.append(c)
+        c = Contact("bottom", _obstacle(obstacle, x0), method=method, theta=theta, gamma0=gamma0,
+                    mu=FRICTION[friction])
+        items.append(c)
+    m = Model(Body(meshes[x0], kind, material, update=update), items)
     m.finalize()
     solver = IncrementalSolver(m, StepSettings(n_steps=2, t_end=0.4))
     res = solver.run()
@@ -125,10 +154,32 @@ def test_jacobian_is_exact(meshes, case):
     _assert_second_order(*_order(m))
 
 
+# every other kind of item: a point load, a body force, a displacement field (with plasticity and
+# penalty contact), and contact with a rounded polyline (penalty and Nitsche)
+ITEM_CASES = (
+    [dict(law="j2", load=load) for load in ("point", "body", "field")]
+    + [dict(law="j2", method=meth, theta=th, obstacle="profile") for meth, th in
+       (("penalty", 0), ("nitsche", -1))]
+)
+
+
+@pytest.mark.parametrize("case", ITEM_CASES, ids=[_id(c) for c in ITEM_CASES])
+def test_jacobian_is_exact_with_every_item(meshes, case):
+    m, c = _state(meshes, **case)
+    _check(m, c, case.get("law"), case.get("method", "penalty"), case.get("friction", "slip"))
+    _assert_second_order(*_order(m))
+
+
 @pytest.mark.mpi
 def test_jacobian_is_exact_on_two_ranks(meshes):
     """The same state distributed: the direction is drawn from global dof numbers, so the test is
-    the serial one; plane-stress plasticity with Nitsche friction."""
+    the serial one; plane-stress plasticity with Nitsche friction. On two ranks the direct solver's
+    round-off differs from run to run (1e-16), which moves the state built by the two increments
+    (points just at the yield surface take the elastic or the plastic tangent), so that in about
+    one run in three one of the larger steps of the last three crosses a yield switch (an order
+    far from 2, e.g. 9.9). A Jacobian that misses a dependence gives order 1 at the smallest
+    steps, whatever the state: the two smallest must show 2."""
     m, c = _state(meshes, kind="plane_stress", law="j2", method="nitsche", theta=0)
     _check(m, c, "j2", "nitsche", "slip")
-    _assert_second_order(*_order(m))
+    orders, text = _order(m)
+    assert np.all(np.abs(orders[-2:] - 2.0) < 0.15), text
