@@ -17,10 +17,12 @@ import pytest
 from mpi4py import MPI
 
 from comove_dolfinx import geometry
-from comove_dolfinx.materials import Elastic
-from comove_dolfinx.model import Model
-from comove_dolfinx.output import Probe
-from comove_dolfinx.scenes import get_scene
+from comove_dolfinx.loads import Displacement, Fixed, Pressure
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.material_data import Elastic
+from comove_dolfinx.mechanics.model import Model
+from comove_dolfinx.presets import get_scene
+from comove_dolfinx.probes import NodeDisplacement
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 
 UPDATES = ("sr", "hughes_winget", "polar", "svk", "neo_hooke")
@@ -39,20 +41,25 @@ def test_pressurised_cylinder_is_lame(cache, update):
     hoop stress at the points within 0.5 % of p (measured 0.18 %, O(h^2))."""
     a, b, p = 1.0, 2.0, 1e-6 * E
     md = geometry.rectangle(b - a, 0.5, 0.125, order=2, x0=a, comm=MPI.COMM_WORLD, cache_dir=cache)
-    m = Model(md, "axisymmetric", Elastic(E, NU), update=update)
-    m.fix("bottom", component=1)
-    m.fix("top", component=1)
-    m.follower_pressure("left", p)
+    m = Model(Body(md, "axisymmetric", Elastic(E, NU), update=update),
+              [Fixed("bottom", component=1), Fixed("top", component=1), Pressure("left", p)])
     m.finalize()
     assert IncrementalSolver(m, StepSettings(n_steps=1, max_cutbacks=0)).run().completed
     A = (1 + NU) * (1 - 2 * NU) * p * a ** 2 / (E * (b ** 2 - a ** 2))
     B = (1 + NU) * p * a ** 2 * b ** 2 / (E * (b ** 2 - a ** 2))
     for r in (a, b):
-        ur = Probe(m.V, (r, 0.25))(m.u)[0]
+        ur = _at(m, (r, 0.25))[0]
         assert ur == pytest.approx(A * r + B / r, rel=2e-4)
     rq = m.rule.evaluate(m.rule.expression(m.x))[:, 0]
     hoop = p * a ** 2 / (b ** 2 - a ** 2) * (1 + b ** 2 / rq ** 2)
     assert np.abs(m.cauchy_stress()[:, 2] - hoop).max() < 5e-3 * p
+
+
+def _at(m, point):
+    """Displacement of the node at ``point``."""
+    probe = NodeDisplacement("node", point)
+    probe.attach(m)
+    return probe.value(m.u)
 
 
 def _homogeneous(l_r, l_z, update, n):
@@ -88,9 +95,10 @@ def test_homogeneous_finite_stretch(cache, update):
     (the Hencky strain) at first and second order."""
     l_r, l_z = 1.1, 0.95
     md = geometry.rectangle(1.0, 1.0, 0.5, order=2, x0=0.5, comm=MPI.COMM_WORLD, cache_dir=cache)
-    m = Model(md, "axisymmetric", Elastic(E, NU), update=update)
-    for name in ("left", "right", "bottom", "top"):
-        m.prescribe(name, lambda x, t: np.vstack([t * (l_r - 1) * x[0], t * (l_z - 1) * x[1]]))
+    def field(x, t):
+        return np.vstack([t * (l_r - 1) * x[0], t * (l_z - 1) * x[1]])
+    m = Model(Body(md, "axisymmetric", Elastic(E, NU), update=update),
+              [Displacement(name, field=field) for name in ("left", "right", "bottom", "top")])
     m.finalize()
     assert IncrementalSolver(m, StepSettings(n_steps=20, max_cutbacks=0)).run().completed
     exact = _homogeneous(l_r, l_z, update, 20)
@@ -107,16 +115,14 @@ def test_plate_centre_deflection_is_mindlin(cache):
     a, h = 10.0, 0.5
     q = 1e-3 * E * h ** 4 / a ** 4
     md = geometry.plate_section(a, h, 0.125, 0.125, order=2, comm=MPI.COMM_WORLD, cache_dir=cache)
-    m = Model(md, "axisymmetric", Elastic(E, NU))
-    m.fix("axis", component=0)
-    m.fix("rim_support", component=1)
-    m.follower_pressure("top", q)
+    m = Model(Body(md, "axisymmetric", Elastic(E, NU)),
+              [Fixed("axis", component=0), Fixed("rim_support", component=1), Pressure("top", q)])
     m.finalize()
     assert IncrementalSolver(m, StepSettings(n_steps=1, max_cutbacks=0)).run().completed
     D = E * h ** 3 / (12 * (1 - NU ** 2))
     G = E / (2 * (1 + NU))
     w0 = (5 + NU) * q * a ** 4 / (64 * (1 + NU) * D) + q * a ** 2 / (4 * 5 / 6 * G * h)
-    assert -Probe(m.V, (0.0, h / 2))(m.u)[1] == pytest.approx(w0, rel=2.5e-3)
+    assert -_at(m, (0.0, h / 2))[1] == pytest.approx(w0, rel=2.5e-3)
 
 
 @pytest.mark.mpi
@@ -124,13 +130,16 @@ def test_plate_scene_is_in_global_equilibrium(mpi_tmp):
     """The plate pressed onto its base with friction (coarse mesh, 5 increments to p = 10): the
     vertical contact force and the rim support's reaction carry p pi (R + u_r(R, t))^2."""
     scene = get_scene("plate", ["size=0.5", "n_steps=5"])
-    model = scene.build_model(scene.mesh_data(MPI.COMM_WORLD))
+    body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
+    model = Model(body, items)
     model.finalize()
-    assert IncrementalSolver(model, scene.step_settings(), scene.newton_settings()).run().completed
-    row = scene.history_row(model)
-    contact = scene.contact_term.force()[1]
+    steps = scene.steps()[0].settings()
+    assert IncrementalSolver(model, steps, scene.newton_settings()).run().completed
+    probe = [p for p in probes if "contact_force" in p.columns][0]
+    contact_item = [item for item in items if item.kind == "contact"][0]
+    contact = contact_item.force()[1]
     reaction = model.reaction("rim_support")[1]
-    r_edge = scene.R + Probe(model.V, (scene.R, scene.t))(model.u)[0]
+    r_edge = scene.R + _at(model, (scene.R, scene.t))[0]
     assert contact > 0 and reaction > 0
     assert contact + reaction == pytest.approx(scene.p_max * math.pi * r_edge ** 2, rel=1e-7)
-    assert row["contact_force"] == contact
+    assert probe(model)["contact_force"] == contact

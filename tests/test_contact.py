@@ -5,8 +5,10 @@ from mpi4py import MPI
 
 from comove_dolfinx import geometry
 from comove_dolfinx.contact import Circle, Contact, ContactError, Plane
-from comove_dolfinx.materials import Elastic
-from comove_dolfinx.model import Model
+from comove_dolfinx.loads import Displacement, Fixed, Pressure, Traction
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.material_data import Elastic
+from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 
 E, NU = 1000.0, 0.3
@@ -32,12 +34,10 @@ def test_hertz_line_contact(hertz_mesh, method, theta):
     """Half-cylinder R = 1 (plane strain) pushed onto a rigid flat: half-width a = sqrt(4 P R/(pi E*))
     and peak pressure p0 = 2 P/(pi a) for the measured load P per unit length (theory.md 7.3).
     With a/R ~ 0.1 and ~10 elements across a, a mesh-level error of a few percent is expected."""
-    m = Model(hertz_mesh, "plane_strain", Elastic(E, NU))
-    m.fix("xsym", component=0)
-    m.fix("top", component=1, value=-0.0095)
     c = Contact("contact", Plane((0.0, 0.0), (0.0, 1.0)), method=method, theta=theta,
                 gamma0=100.0 if method == "penalty" else 10.0)
-    m.boundary_terms.append(c)
+    m = Model(Body(hertz_mesh, "plane_strain", Elastic(E, NU)),
+              [Fixed("xsym", component=0), Displacement("top", -0.0095, component=1), c])
     _solve(m, 2)
     P = 2.0 * c.force()[1]                               # full cylinder (the quarter carries half)
     Es = E / (1 - NU ** 2)
@@ -56,12 +56,10 @@ def test_hertz_against_a_rigid_cylinder(hertz_mesh, method, theta):
     """The half-cylinder R1 = 1 pressed onto a rigid cylinder R2 = 4 (a Circle obstacle, the two
     convex): Hertz with the effective radius R* = R1 R2 / (R1 + R2) = 0.8, half-width
     a = sqrt(4 P R* / (pi E*)) and peak pressure p0 = 2 P / (pi a) (theory.md 7.3)."""
-    m = Model(hertz_mesh, "plane_strain", Elastic(E, NU))
-    m.fix("xsym", component=0)
-    m.fix("top", component=1, value=-0.0095)
     c = Contact("contact", Circle((0.0, -4.0), 4.0), method=method, theta=theta,
                 gamma0=100.0 if method == "penalty" else 10.0)
-    m.boundary_terms.append(c)
+    m = Model(Body(hertz_mesh, "plane_strain", Elastic(E, NU)),
+              [Fixed("xsym", component=0), Displacement("top", -0.0095, component=1), c])
     _solve(m, 2)
     P = 2.0 * c.force()[1]                 # the halves' horizontal forces cancel in the whole
     Es = E / (1 - NU ** 2)
@@ -86,11 +84,9 @@ def test_block_uniform_pressure(block, method):
     p = 20.0
     out = {}
     for gamma0 in (10.0, 100.0):
-        m = Model(block, "plane_stress", Elastic(E, NU))
-        m.fix("left", component=0)
-        m.follower_pressure("top", p)
         c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)), method=method, gamma0=gamma0)
-        m.boundary_terms.append(c)
+        m = Model(Body(block, "plane_stress", Elastic(E, NU)),
+                  [Fixed("left", component=0), Pressure("top", p), c])
         _solve(m, 1)
         c.update_fields()
         np.testing.assert_allclose(c.boundary_values(c.pressure)[1], p, rtol=1e-8)
@@ -111,15 +107,16 @@ def _friction_block(block, mu, pull, relag=False):
     """A dead pressure p on top for t <= 1/2, then a pull on the right face (dead traction or
     displacement). Dead loads keep the equilibrium of the horizontal forces exact: friction = -pull."""
     p = 10.0
-    m = Model(block, "plane_stress", Elastic(E, NU))
-    m.dead_traction("top", lambda t: (0.0, -p * min(1.0, 2 * t)))
+    press = Traction("top", (0.0, -p))
+    press.ramp(lambda t: min(1.0, 2 * t))
     kind, amount = pull
     if kind == "traction":
-        m.dead_traction("right", lambda t: (amount * max(0.0, 2 * t - 1), 0.0))
+        pull_item = Traction("right", (amount, 0.0))
     else:
-        m.fix("right", component=0, value=lambda t: amount * max(0.0, 2 * t - 1))
+        pull_item = Displacement("right", amount, component=0)
+    pull_item.ramp(lambda t: max(0.0, 2 * t - 1))
     c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)), mu=mu, gamma0=100.0, relag=relag)
-    m.boundary_terms.append(c)
+    m = Model(Body(block, "plane_stress", Elastic(E, NU)), [press, pull_item, c])
     forces, ux = [], {}          # read inside the increment: the slip increment is still visible
 
     def record(m, inc):
@@ -160,12 +157,11 @@ def test_lagged_friction_with_a_moving_obstacle(block, method):
     previous increment, whatever the floor did since. (Reading the lag state's body against the
     floor's new position would count the whole rise of an increment as pressure.)"""
     mu = 0.3
-    m = Model(block, "plane_stress", Elastic(E, NU))
-    m.fix("top", component=1)
-    m.fix("right", component=0, value=lambda t: 0.05 * max(0.0, 2 * t - 1))
+    pull = Displacement("right", 0.05, component=0)
+    pull.ramp(lambda t: max(0.0, 2 * t - 1))
     c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0), motion=(0.0, 0.01)), method=method, mu=mu,
                 gamma0=100.0 if method == "penalty" else 10.0)
-    m.boundary_terms.append(c)
+    m = Model(Body(block, "plane_stress", Elastic(E, NU)), [Fixed("top", component=1), pull, c])
     forces = []
     _solve(m, 8, [lambda m, inc: forces.append(c.force())])
     normal = [f[1] for f in forces]
@@ -187,11 +183,8 @@ def test_cantilever_lift_off_length(tmp_path_factory, method):
     q = 72 * EI * d / s_ref ** 4
     md = geometry.rectangle(L, h, 0.1, order=2, comm=MPI.COMM_WORLD,
                             cache_dir=str(tmp_path_factory.mktemp("meshes")))
-    m = Model(md, "plane_stress", Elastic(E, 0.0))
-    m.fix("left")
-    m.dead_traction("top", (0.0, -q))
     c = Contact("bottom", Plane((0.0, -d), (0.0, 1.0)), method=method, gamma0=1.0)
-    m.boundary_terms.append(c)
+    m = Model(Body(md, "plane_stress", Elastic(E, 0.0)), [Fixed("left"), Traction("top", (0.0, -q)), c])
     _solve(m, 2, max_cutbacks=12)
     s_force = 1.5 * (L - c.force()[1] / q)
     assert s_force == pytest.approx(s_ref, rel=5e-3)
@@ -207,9 +200,8 @@ def test_contact_input_errors(block):
         Contact("bottom", Plane((0, 0), (0, 1)), theta=2)
     with pytest.raises(ContactError, match="radius"):
         Circle((0, 0), -1.0)
-    m = Model(block, "plane_stress", Elastic(E, NU))
     c = Contact("bottom", Plane((0.0, 0.5), (0.0, 1.0)))        # the plane cuts through the block
-    m.boundary_terms.append(c)
+    m = Model(Body(block, "plane_stress", Elastic(E, NU)), [c])
     m.finalize()
     with pytest.raises(ContactError, match="starts inside"):
         c.check_start()

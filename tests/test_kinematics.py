@@ -7,7 +7,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from comove_dolfinx import compat
-from comove_dolfinx import kinematics as kin
+from comove_dolfinx.mechanics import kinematics as kin
 
 
 def _const(msh, A):

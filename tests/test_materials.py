@@ -1,4 +1,4 @@
-"""Material-point tests of comove_dolfinx.materials: validation, closed forms, tangents, isotropy, Chen vs J2.
+"""Material-point tests of the materials (comove_dolfinx.mechanics): validation, closed forms, tangents, isotropy, Chen vs J2.
 
 Stored tensors are (xx, yy, zz, xy) with the tensor shear component; see the module docstring.
 """
@@ -6,15 +6,8 @@ Stored tensors are (xx, yy, zz, xy) with the tensor shear component; see the mod
 import numpy as np
 import pytest
 
-from comove_dolfinx.materials import (
-    MODELS,
-    Elastic,
-    Hardening,
-    MaterialError,
-    chen_update,
-    j2_return,
-    von_mises,
-)
+from comove_dolfinx.mechanics.material_data import MODELS, Elastic, Hardening, MaterialError, von_mises
+from comove_dolfinx.mechanics.return_maps import chen_update, j2_return
 
 # the ring's mild steel (scenes.md), kg/cm^2
 STEEL_EL = Elastic(1.89e6, 0.3)

@@ -1,4 +1,4 @@
-"""Output of physical components on the convected base (kinematics.fibre_stress, output.FibreStress):
+"""Output of physical components on the convected base (kinematics.fibre_stress, io.FibreStress):
 the stress along a material fibre follows the fibre through a rigid rotation, and the hoop stress of an
 elastic tube under internal pressure is Lame's."""
 import numpy as np
@@ -6,10 +6,13 @@ import pytest
 import ufl
 from mpi4py import MPI
 
+import comove_dolfinx as cm
 from comove_dolfinx import geometry
-from comove_dolfinx.materials import Elastic
-from comove_dolfinx.model import Model
-from comove_dolfinx.output import FibreStress
+from comove_dolfinx.io import FibreStress
+from comove_dolfinx.loads import Fixed, Pressure
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.material_data import Elastic
+from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 
 
@@ -18,7 +21,7 @@ def test_fibre_stress_follows_a_rigid_rotation(tmp_path):
     stress along the material fibres that started along x and y is still sigma0_xx and sigma0_yy,
     although the Cartesian components have swapped."""
     md = geometry.rectangle(1.0, 1.0, 0.5, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
-    m = Model(md, "plane_strain", Elastic(1000.0, 0.3), update="sr")
+    m = Model(Body(md, "plane_strain", Elastic(1000.0, 0.3), update="sr"))
     m.finalize()
     s0 = np.array([50.0, -20.0, 10.0, 30.0])                 # xx, yy, zz, xy
     m.sigma_n.x.array[:] = np.tile(s0, m.rule.size)
@@ -44,10 +47,8 @@ def test_hoop_stress_of_a_pressurised_tube_is_lame(mpi_tmp):
     a, b, E = 1.0, 2.0, 1000.0
     p = 1e-4 * E
     md = geometry.annulus_sector(a, b, 0.2, order=2, comm=MPI.COMM_WORLD, cache_dir=str(mpi_tmp))
-    m = Model(md, "plane_strain", Elastic(E, 0.3))
-    m.fix("xsym", component=0)
-    m.fix("ysym", component=1)
-    m.follower_pressure("inner", p)
+    m = Model(Body(md, "plane_strain", Elastic(E, 0.3)),
+              [Fixed("xsym", component=0), Fixed("ysym", component=1), Pressure("inner", p)])
     m.finalize()
     assert IncrementalSolver(m, StepSettings(n_steps=1, max_cutbacks=0)).run().completed
     x = m.x
@@ -125,20 +126,13 @@ def test_xdmf_contact_pressure_is_the_contact_law(tmp_path):
     import subprocess
     import sys
 
-    from comove_dolfinx.contact import Contact, Plane
-    from comove_dolfinx.output import XDMFOutput
     q = 20.0
     md = geometry.rectangle(2.0, 1.0, 0.25, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
-    m = Model(md, "plane_stress", Elastic(1000.0, 0.3))
-    m.fix("left", component=0)
-    m.follower_pressure("top", q)
-    c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
-    m.boundary_terms.append(c)
-    m.finalize()
-    xdmf = XDMFOutput(tmp_path / "results.xdmf", m,
-                      [("contact_pressure", lambda: (c.update_fields(), c.pressure)[1])])
-    res = IncrementalSolver(m, StepSettings(n_steps=2)).run([lambda model, inc: xdmf.write(inc.load)])
-    xdmf.close()
+    c = cm.Contact("bottom", cm.Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
+    # the XDMF writer adds every contact item's contact_pressure to its fields
+    res = cm.Job(cm.Body(md, "plane_stress", cm.Elastic(1000.0, 0.3)),
+                 [cm.Fixed("left", component=0), cm.Pressure("top", q), c], [cm.Step(2)],
+                 writers=[cm.XDMF(tmp_path / "results.xdmf")]).run()
     assert res.completed
     r = subprocess.run([sys.executable, "-c", _READ_CONTACT, str(tmp_path / "results.h5")],
                        capture_output=True, text=True, timeout=120)

@@ -7,10 +7,13 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from comove_dolfinx import geometry, updates
-from comove_dolfinx.kinematics import to_tensor
-from comove_dolfinx.materials import Elastic
-from comove_dolfinx.model import Model
+from comove_dolfinx import geometry
+from comove_dolfinx.loads import Displacement, Fixed
+from comove_dolfinx.mechanics import updates
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.kinematics import to_tensor
+from comove_dolfinx.mechanics.material_data import Elastic
+from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 
 
@@ -21,7 +24,7 @@ def square(tmp_path_factory):
 
 
 def _point_model(md, update, kind="plane_strain", E=2.6, nu=0.3):
-    m = Model(md, kind, Elastic(E, nu), update=update)
+    m = Model(Body(md, kind, Elastic(E, nu), update=update))
     m.finalize()
     return m
 
@@ -50,7 +53,7 @@ class NoRotationUpdate(updates.StressUpdate):
     def build(self, u, u_n, state_n):
         import ufl
 
-        from comove_dolfinx.kinematics import increment_gradient
+        from comove_dolfinx.mechanics.kinematics import increment_gradient
         dH = increment_gradient(self.F(u), self.F(u_n))
         sig = to_tensor(state_n) + updates.hooke(ufl.sym(dH), self.elastic, self.kin.model)
         return updates.UpdateExpr(sig, sig)
@@ -138,10 +141,9 @@ def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n):
     """
     E, lam = 1000.0, 2.0
     md = geometry.rectangle(2.0, 1.0, 0.5, order=2, comm=MPI.COMM_WORLD, cache_dir=str(tmp_path))
-    m = Model(md, "plane_stress", Elastic(E, 0.3), update="sr")
-    m.fix("left", component=0)
-    m.fix("bottom", component=1)
-    m.fix("right", component=0, value=2.0 * (lam - 1.0))
+    m = Model(Body(md, "plane_stress", Elastic(E, 0.3), update="sr"),
+              [Fixed("left", component=0), Fixed("bottom", component=1),
+               Displacement("right", 2.0 * (lam - 1.0), component=0)])
     m.finalize()
     res = IncrementalSolver(m, StepSettings(n_steps=n, max_cutbacks=0)).run()
     assert res.completed
