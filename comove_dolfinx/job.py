@@ -134,11 +134,11 @@ class Job:
     """A body, its items, the steps, the probes and the writers (see the module docstring)."""
 
     def __init__(self, body, items=(), steps=(), probes=(), writers=(), newton: NewtonSettings | None = None,
-                 load: Callable[[float], float] | None = None, jit_options: dict | None = None):
+                 load: Callable[[float], float] | None = None, form_options: dict | None = None):
         self.body, self.items = body, list(items)
         self.steps = list(steps) or [Step()]
         self.probes, self.writers = list(probes), list(writers)
-        self.newton, self.load, self.jit_options = newton or NewtonSettings(), load, jit_options
+        self.newton, self.load, self.form_options = newton or NewtonSettings(), load, form_options
         for s in self.steps:
             if not isinstance(s, Step):
                 raise JobError(f"steps: {s!r} is not a Step")
@@ -154,7 +154,7 @@ class Job:
         timer = Timer()
         with timer("setup and compilation"):
             model = Model(self.body, self.items)
-            model.finalize(self.jit_options)
+            model.finalize(self.form_options)
         self.model = model
         comm = model.comm
         contacts = [item for item in self.items if item.kind == "contact"]

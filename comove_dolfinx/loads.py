@@ -173,14 +173,14 @@ class Traction(Item):
 
     def __init__(self, boundary: str, vector):
         super().__init__(boundary)
-        self.boundary, self.vector = boundary, _finite(f"traction on {boundary!r}", vector, (2,))
+        self.boundary, self.traction = boundary, _finite(f"traction on {boundary!r}", vector, (2,))
 
     def attach(self, ctx):
         self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
         return -(ufl.dot(self._c, ctx.v) * ctx.weight * ctx.ds(self.boundary))
 
     def _apply(self, factor):
-        self._c.value = factor * self.vector
+        self._c.value = factor * self.traction
 
 
 class BodyForce(Item):
@@ -188,7 +188,7 @@ class BodyForce(Item):
 
     def __init__(self, vector, name: str = "body_force"):
         super().__init__(name)
-        self.vector = _finite("body force", vector, (2,))
+        self.force = _finite("body force", vector, (2,))
 
     def attach(self, ctx):
         self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
@@ -196,7 +196,7 @@ class BodyForce(Item):
         return -(ufl.dot(self._c, ctx.v) * ctx.weight * dx)
 
     def _apply(self, factor):
-        self._c.value = factor * self.vector
+        self._c.value = factor * self.force
 
 
 class PointLoad(Item):
@@ -207,7 +207,7 @@ class PointLoad(Item):
     def __init__(self, point, vector, name: str = "point_load"):
         super().__init__(name)
         self.point = _finite("point of the load", point, (2,))
-        self.vector = _finite("point load", vector, (2,))
+        self.force = _finite("point load", vector, (2,))
 
     def attach(self, ctx):
         from mpi4py import MPI
@@ -225,4 +225,4 @@ class PointLoad(Item):
         return None
 
     def nodal(self):
-        return self._dofs, np.broadcast_to(self.factor * self.vector, (len(self._dofs) // 2, 2)).ravel()
+        return self._dofs, np.broadcast_to(self.factor * self.force, (len(self._dofs) // 2, 2)).ravel()

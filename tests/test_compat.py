@@ -15,11 +15,11 @@ VERSIONED = [
     r"\.sub_elements\(", r"\.degree\(\)", r"basix\.create_element", r"fem\.Expression\(",
     r"\.eval\(", r"\.cellname\(", r"create_vector\(", r"create_matrix\(", r"assemble_matrix\(",
 ]
-FILES = [p for d in ("comove_dolfinx", "tests", "demos") for p in sorted((ROOT / d).glob("*.py"))
+FILES = [p for d in ("comove_dolfinx", "tests", "demos") for p in sorted((ROOT / d).rglob("*.py"))
          if p.name not in ("compat.py", "test_compat.py")]
 
 
-@pytest.mark.parametrize("path", FILES, ids=[f"{p.parent.name}/{p.name}" for p in FILES])
+@pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROOT)) for p in FILES])
 def test_versioned_apis_only_in_compat(path):
     bad = []
     for n, line in enumerate(path.read_text().splitlines(), 1):
