@@ -27,7 +27,7 @@ from .mechanics.model import Model
 from .presets import get_scene
 from .solver import IncrementalSolver, StepSettings
 
-# lam = 5: v/L and (L - x_tip)/L of the inextensible elastica (theory.md 7.1)
+# lam = 5: v/L and (L - x_tip)/L of the inextensible elastica (docs/theory.md section 8.1)
 ELASTICA_5 = (0.71379, 0.38763)
 
 

@@ -6,7 +6,7 @@
   r-z section: the Cauchy stress of each law in closed form (St Venant-Kirchhoff and neo-Hooke exactly;
   the hypoelastic updates integrate sigma = C : ln V).
 * The plate (a = 10, h = 0.5, a/h = 20) simply supported at its lower rim, radially free, under a small
-  uniform pressure: the centre deflection of Mindlin's plate theory (theory 7.5).
+  uniform pressure: the centre deflection of Mindlin's plate theory (docs/theory.md section 8.5).
 * Global equilibrium of the plate scene pressed onto its base: contact force + support reaction =
   the follower pressure's resultant, p times the area of the deformed top face projected on the base.
 """

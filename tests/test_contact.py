@@ -32,7 +32,7 @@ def hertz_mesh(tmp_path_factory):
 @pytest.mark.parametrize("method, theta", [("penalty", 0), ("nitsche", 0), ("nitsche", 1)])
 def test_hertz_line_contact(hertz_mesh, method, theta):
     """Half-cylinder R = 1 (plane strain) pushed onto a rigid flat: half-width a = sqrt(4 P R/(pi E*))
-    and peak pressure p0 = 2 P/(pi a) for the measured load P per unit length (theory.md 7.3).
+    and peak pressure p0 = 2 P/(pi a) for the measured load P per unit length (docs/theory.md section 8.3).
     With a/R ~ 0.1 and ~10 elements across a, a mesh-level error of a few percent is expected."""
     c = Contact("contact", Plane((0.0, 0.0), (0.0, 1.0)), method=method, theta=theta,
                 gamma0=100.0 if method == "penalty" else 10.0)
@@ -55,7 +55,7 @@ def test_hertz_line_contact(hertz_mesh, method, theta):
 def test_hertz_against_a_rigid_cylinder(hertz_mesh, method, theta):
     """The half-cylinder R1 = 1 pressed onto a rigid cylinder R2 = 4 (a Circle obstacle, the two
     convex): Hertz with the effective radius R* = R1 R2 / (R1 + R2) = 0.8, half-width
-    a = sqrt(4 P R* / (pi E*)) and peak pressure p0 = 2 P / (pi a) (theory.md 7.3)."""
+    a = sqrt(4 P R* / (pi E*)) and peak pressure p0 = 2 P / (pi a) (docs/theory.md section 8.3)."""
     c = Contact("contact", Circle((0.0, -4.0), 4.0), method=method, theta=theta,
                 gamma0=100.0 if method == "penalty" else 10.0)
     m = Model(Body(hertz_mesh, "plane_strain", Elastic(E, NU)),
@@ -174,7 +174,7 @@ def test_lagged_friction_with_a_moving_obstacle(block, method):
 @pytest.mark.parametrize("method", ["penalty", "nitsche"])
 def test_cantilever_lift_off_length(tmp_path_factory, method):
     """Thin cantilever clamped at height d over a flat, dead load q per length: it touches down at
-    s = (72 E I d / q)^(1/4) from the clamp (small deflection, theory.md 7.4) with a reaction q s/3
+    s = (72 E I d / q)^(1/4) from the clamp (small deflection, docs/theory.md section 8.4) with a reaction q s/3
     there, and the rest lies flat, so the contact force is q (L - s) + q s/3 (h/s = 0.02: beam theory
     holds to a fraction of a percent). The front itself is a weak measure: beyond it the gap opens
     only as (s - x)^3 R/(6 E I) and the continuum spreads the reaction over about the depth h."""

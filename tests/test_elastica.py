@@ -1,4 +1,4 @@
-"""The elastica verification scene against the inextensible elastica (theory.md 7.1), every update."""
+"""The elastica verification scene against the inextensible elastica (docs/theory.md section 8.1), every update."""
 import csv
 
 import launch
@@ -8,7 +8,7 @@ from comove_dolfinx.cli import run_scene
 from comove_dolfinx.mechanics.updates import UPDATES
 from comove_dolfinx.presets import get_scene
 
-# lam: (v/L, (L - x_tip)/L) of the inextensible elastica, theory.md 7.1
+# lam: (v/L, (L - x_tip)/L) of the inextensible elastica, docs/theory.md section 8.1
 ELASTICA = {1.0: (0.30172, 0.05643), 2.0: (0.49346, 0.16064), 5.0: (0.71379, 0.38763)}
 
 

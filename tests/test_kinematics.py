@@ -15,7 +15,7 @@ def _const(msh, A):
 
 
 def test_sr_vectors_2d(unit_mesh):
-    """theory.md 1.7: F = [[1.1, 0.3], [-0.2, 0.95]]."""
+    """docs/theory.md section 2.5: F = [[1.1, 0.3], [-0.2, 0.95]]."""
     F = np.array([[1.1, 0.3], [-0.2, 0.95]])
     S, R, c = kin.sr_decomposition(_const(unit_mesh, F - np.eye(2)))
     assert evaluate(c, unit_mesh) == pytest.approx(0.968246, abs=1e-6)
@@ -24,7 +24,7 @@ def test_sr_vectors_2d(unit_mesh):
 
 
 def test_sr_vectors_3d(unit_mesh):
-    """theory.md 1.7, the 3D vector; also S + R = F, R^T R = I, S = S^T."""
+    """docs/theory.md section 2.5, the 3D vector; also S + R = F, R^T R = I, S = S^T."""
     F = np.array([[1.05, 0.2, -0.1], [-0.1, 0.98, 0.15], [0.05, -0.25, 1.02]])
     S, R, c = kin.sr_decomposition(_const(unit_mesh, F - np.eye(3)))
     Rv, Sv = evaluate(R, unit_mesh), evaluate(S, unit_mesh)
@@ -40,7 +40,7 @@ def test_sr_vectors_3d(unit_mesh):
 
 @pytest.mark.parametrize("deg", [1.0, 30.0, 60.0, 89.0])
 def test_rigid_increment_gives_zero_strain(unit_mesh, deg):
-    """A rigid rotation up to 90 degrees: S = 0 and R = Q to round-off (theory 1.5(4))."""
+    """A rigid rotation up to 90 degrees: S = 0 and R = Q to round-off (docs/theory.md section 2.3(4))."""
     a = np.radians(deg)
     n = np.array([1.0, -2.0, 0.5]) / np.linalg.norm([1.0, -2.0, 0.5])
     K = np.array([[0, -n[2], n[1]], [n[2], 0, -n[0]], [-n[1], n[0], 0]])
@@ -70,7 +70,7 @@ def test_christoffel_two_ways(unit_mesh):
 
 
 def test_covariant_derivative_equals_F_inverse_grad_v(unit_mesh):
-    """v^I||_J through the Christoffel symbols equals F^-1 Grad v (theory.md 2)."""
+    """v^I||_J through the Christoffel symbols equals F^-1 Grad v (docs/theory.md section 1.1)."""
     u, v = _p2_fields(unit_mesh)
     F = ufl.Identity(2) + ufl.grad(u)
     for pt in [(0.2, 0.3), (0.6, 0.1)]:

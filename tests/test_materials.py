@@ -9,7 +9,7 @@ import pytest
 from comove_dolfinx.mechanics.material_data import MODELS, Elastic, Hardening, MaterialError, von_mises
 from comove_dolfinx.mechanics.return_maps import chen_update, j2_return
 
-# the ring's mild steel (scenes.md), kg/cm^2
+# the ring's mild steel (docs/scenes.md), kg/cm^2
 STEEL_EL = Elastic(1.89e6, 0.3)
 STEEL = Hardening((0.0, 0.01, 0.05, 0.1, 0.2, 0.5), (2800.0, 3000.0, 3600.0, 4000.0, 4500.0, 5300.0))
 # a soft, strongly hardening material: slopes H comparable to G make the laws' differences visible

@@ -1,5 +1,5 @@
-"""The ring scene on a coarse mesh against the estimates of theory.md 6.4: the thin-ring elastic slope,
-the rigid-plastic collapse load P0 = 4 M_p / R and the DeRunz-Hodge post-collapse curve."""
+"""The ring scene on a coarse mesh against the estimates of docs/theory.md sections 8.2 and 8.6: the
+thin-ring elastic slope, the rigid-plastic collapse load P0 = 4 M_p / R and the DeRunz-Hodge post-collapse curve."""
 import csv
 import math
 
@@ -21,7 +21,7 @@ def _ring_constants(scene, plane_strain=True):
     t = scene.wall
     R = scene.R_out - t / 2                       # mean radius
     E = scene.E / (1 - scene.nu ** 2) if plane_strain else scene.E
-    slope = E * t ** 3 / 12 / (0.14868 * R ** 3)   # delta = 0.14868 P R^3 / (E I), theory 7.2
+    slope = E * t ** 3 / 12 / (0.14868 * R ** 3)   # delta = 0.14868 P R^3 / (E I), docs/theory.md section 8.2
     s0 = scene.table().sigma_y(0.0)
     mp = (2 / math.sqrt(3) if plane_strain else 1.0) * s0 * t ** 2 / 4
     return slope, 4 * mp / R, 2 * R

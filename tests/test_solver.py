@@ -16,7 +16,7 @@ from comove_dolfinx.solver import (
     _extrapolate,
 )
 
-# lam = 2 of the inextensible elastica (theory.md 7.1): v/L
+# lam = 2 of the inextensible elastica (docs/theory.md section 8.1): v/L
 ELASTICA_2 = 0.49346
 
 

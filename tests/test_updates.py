@@ -1,6 +1,6 @@
 """Stress updates at a material point (homogeneous deformation through the production Model).
 
-References: objectivity of rigid increments (exact), hypoelastic simple shear (theory.md 3.4: Jaumann
+References: objectivity of rigid increments (exact), hypoelastic simple shear (docs/theory.md section 3.4: Jaumann
 and Green-Naghdi closed forms), uniaxial stress sigma = E ln(lambda) of the elastic rate law.
 """
 import numpy as np
@@ -95,10 +95,10 @@ def shear_mesh(square):
 
 
 def test_sr_simple_shear_tends_to_jaumann(shear_mesh):
-    """theory.md 3.3: the incremental S-R update integrates the Jaumann rate (sigma_12 = mu sin(gamma))."""
+    """docs/theory.md section 3.2: the incremental S-R update integrates the Jaumann rate (sigma_12 = mu sin(gamma))."""
     g = 1.5
     s20, s200 = _simple_shear("sr", g, 20), _simple_shear("sr", g, 200)
-    # values of theory.md 3.3 (same algorithm, computed independently there)
+    # values of docs/theory.md section 3.2 (same algorithm, computed independently there)
     assert s20[3] == pytest.approx(1.0317, abs=1e-4)
     assert s200[3] == pytest.approx(1.0010, abs=1e-4)
     e20, e200 = abs(s20[3] - np.sin(g)), abs(s200[3] - np.sin(g))
@@ -117,14 +117,14 @@ def test_hughes_winget_simple_shear_is_jaumann(shear_mesh):
     e200, e800 = abs(s200[3] - np.sin(4.0)), abs(s800[3] - np.sin(4.0))
     assert e800 < 5e-3 and e200 / e800 == pytest.approx(4.0, rel=0.05)
     assert s800[0] == pytest.approx(1 - np.cos(4.0), abs=3e-3)
-    # the S-R update at the same point, theory.md 3.3: -0.7485 with 400 increments
+    # the S-R update at the same point, docs/theory.md section 3.2: -0.7485 with 400 increments
     assert _simple_shear("sr", 4.0, 400)[3] == pytest.approx(-0.7485, abs=1e-4)
 
 
 @pytest.mark.parametrize("gamma, s12, s11", [(1.0, 0.86978, 0.41590), (2.0, 1.38629, 1.14159),
                                              (4.0, 2.31794, 2.27420)])
 def test_polar_simple_shear_follows_green_naghdi(shear_mesh, gamma, s12, s11):
-    """theory.md 3.4 table (Dienes 1979 closed form)."""
+    """docs/theory.md section 3.4 table (Dienes 1979 closed form)."""
     s = _simple_shear("polar", gamma, 100)
     assert s[3] == pytest.approx(s12, abs=2e-3)
     assert s[0] == pytest.approx(s11, abs=2e-3)

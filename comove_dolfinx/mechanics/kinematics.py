@@ -1,7 +1,7 @@
 """Co-moving (convected) kinematics in UFL.
 
 The co-moving coordinates are the reference Cartesian positions X, so the convected base vectors
-g_I are the columns of F and every tensor is stored in Cartesian components (theory.md section 2).
+g_I are the columns of F and every tensor is stored in Cartesian components (docs/theory.md section 1.1).
 
 Conventions
 -----------
@@ -14,7 +14,7 @@ Conventions
 * The S-R decomposition (Chen) of a displacement gradient H: F = I + H = S + R with S symmetric
   (a strain, zero for a rigid motion) and R a rotation, in the singularity-free form
   c = sqrt(1 - W:W/2), R = I + W + W.W/(1 + c), S = sym H - W.W/(1 + c), W = skew H
-  (theory.md 1.2). It exists while W:W/2 <= 1 and is applied to increments, where that always holds.
+  (docs/theory.md section 2.2). It exists while W:W/2 <= 1 and is applied to increments, where that always holds.
 """
 from __future__ import annotations
 

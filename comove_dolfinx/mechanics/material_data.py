@@ -207,7 +207,7 @@ class Hardening:
         return self._h[np.clip(k, 0, len(self._h) - 1)]
 
     def solve_dp(self, seq_tr: ArrayLike, p_n: ArrayLike, three_mu: float) -> tuple[np.ndarray, np.ndarray]:
-        """Exact root dp of seq_tr - three_mu dp - sigma_y(p_n + dp) = 0 (theory 4.2).
+        """Exact root dp of seq_tr - three_mu dp - sigma_y(p_n + dp) = 0 (docs/theory.md section 4.2).
 
         The residual is piecewise linear and strictly decreasing in dp, so the root is found by scanning the
         segments. A root exactly on a table point belongs to the segment that starts there.

@@ -1,8 +1,9 @@
 """Quadrature spaces: state storage, evaluation of UFL expressions at the points, output averages.
 
 One quadrature degree per model is used for every quadrature element, for the points handed to
-``fem.Expression`` and for the metadata of every ``dx`` touching a quadrature function (dolfinx-0.5.md
-C.5). The quadrature dofmap is the identity, so arrays are laid out cell by cell (local cells, then
+``fem.Expression`` and for the metadata of every ``dx`` touching a quadrature function: a ``dx``
+whose degree differs from the quadrature element's would evaluate the function at points it does not
+hold. The quadrature dofmap is the identity, so arrays are laid out cell by cell (local cells, then
 ghosts), then point by point, then component by component.
 """
 from __future__ import annotations

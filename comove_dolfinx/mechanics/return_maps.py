@@ -48,7 +48,7 @@ __all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_update", "de
 
 def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
               model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Von Mises return mapping with isotropic hardening (backward Euler, theory 4.1-4.3).
+    """Von Mises return mapping with isotropic hardening (backward Euler, docs/theory.md section 4.1-4.3).
 
     Parameters
     ----------
@@ -197,7 +197,7 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
 
 def chen_update(sig_rot: ArrayLike, sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
                 model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """One explicit increment of Chen Zhi-da's single-parameter law (theory 4.4).
+    """One explicit increment of Chen Zhi-da's single-parameter law (docs/theory.md section 4.4).
 
     Rate law: s_dot = 2G [e_dot - beta (s:e_dot) s / (s:s)] with beta = 1 - E_t / (3G) on loading and 0 on
     unloading; the volumetric part is elastic. E_t = E H / (E + H) is the uniaxial tangent from the hardening
@@ -236,7 +236,7 @@ def chen_update(sig_rot: ArrayLike, sig_tr: ArrayLike, p_n: ArrayLike, elastic: 
     stress with r = 0. For nu < 0.5, beta exceeds the J2 value 3G / (3G + H) and p grows faster than
     the table needs: the next increment starts inside the surface and its first part is elastic, so in the
     limit of small increments the law follows sigma_eq = sigma_y(p) with the J2 flow and the
-    compressibility difference between the two laws (theory 4.4) disappears.
+    compressibility difference between the two laws (docs/theory.md section 4.4) disappears.
     """
     check_model(model)
     x, y = as_points(sig_tr, "sig_tr"), as_points(sig_rot, "sig_rot")

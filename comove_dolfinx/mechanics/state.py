@@ -5,7 +5,7 @@ increment n (the stress, or for the polar update the unrotated stress), ``sigma`
 current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain, ``D`` (and
 ``D_rot`` for Chen's law) the derivatives of the return map; in plane-stress plasticity ``F22_n``/``F22``
 the thickness stretch, F22 = F22_n exp(ezz), and ``G_tr``/``G_rot`` the derivatives of ezz
-(docs/theory.md section 4.4).
+(docs/theory.md section 4.3).
 
 Facet integrals cannot see quadrature functions (dolfinx evaluates none there); the converged state
 is copied to cell-wise DG fits at each commit (exact interpolation for DG1 and the 3-point rule), from

@@ -5,7 +5,7 @@ the displacement u (the "trial" stress, before any plastic correction), given th
 increment n. The model evaluates it at the quadrature points, applies the material's return map if
 there is one, and differentiates it with UFL for an exact Jacobian.
 
-Names (theory.md section 3):
+Names (docs/theory.md section 3):
 
 ``sr``            (default) incremental S-R update: dH = F F_n^-1 - I, Chen's split dH -> (dS, dR),
                   sigma = dR sigma_n dR^T + C:dS. Objective for rigid increments; converges to the
@@ -89,7 +89,7 @@ class StressUpdate:
 
 
 class SRUpdate(StressUpdate):
-    """Incremental S-R update (theory.md 3.3), the project's default."""
+    """Incremental S-R update (docs/theory.md section 3.2), the project's default."""
 
     name = "sr"
 

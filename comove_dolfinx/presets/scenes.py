@@ -32,7 +32,7 @@ def _strip_mesh(scene, comm, need):
 # ------------------------------------------------------------------------------------------------
 @dataclass
 class Elastica(Scene):
-    """Verification: cantilever under a dead vertical tip load (Mattiasson's elastica, theory 7.1)."""
+    """Verification: cantilever under a dead vertical tip load (Mattiasson's elastica, docs/theory.md section 8.1)."""
 
     name: ClassVar[str] = "elastica"
     summary: ClassVar[str] = ("cantilever L=10, h=0.25 (plane stress), dead tip load "
@@ -72,7 +72,7 @@ class Elastica(Scene):
 
 @dataclass
 class Beam(ContactScene):
-    """Cantilever pressed onto a rigid foundation by a follower pressure (scenes.md)."""
+    """Cantilever pressed onto a rigid foundation by a follower pressure (docs/scenes.md)."""
 
     name: ClassVar[str] = "beam"
     summary: ClassVar[str] = ("cantilever L=10, h=0.5 (plane stress) under follower pressure q "
@@ -113,7 +113,7 @@ class Beam(ContactScene):
 
 @dataclass
 class Plate(ContactScene):
-    """Thick circular plate pressed onto a rigid base (axisymmetric, scenes.md)."""
+    """Thick circular plate pressed onto a rigid base (axisymmetric, docs/scenes.md)."""
 
     name: ClassVar[str] = "plate"
     summary: ClassVar[str] = ("circular plate R=10, t=2 (axisymmetric), follower pressure p up to "
@@ -168,7 +168,7 @@ class Plate(ContactScene):
         return [("radial_stress", (1.0, 0.0))]      # along the deformed radius (bending stress)
 
 
-# Representative mild steel of scenes.md: equivalent plastic strain -> yield stress [kgf/cm^2]
+# Representative mild steel of docs/scenes.md: equivalent plastic strain -> yield stress [kgf/cm^2]
 RING_HARDENING = "0:2800, 0.01:3000, 0.05:3600, 0.1:4000, 0.2:4500, 0.5:5300"
 
 
@@ -185,7 +185,7 @@ def parse_table(text: str) -> Hardening:
 
 @dataclass
 class Ring(ContactScene):
-    """Metal ring crushed between rigid plates (quarter, plane strain, elastic-plastic; scenes.md).
+    """Metal ring crushed between rigid plates (quarter, plane strain, elastic-plastic; docs/scenes.md).
 
     The quarter x, y >= 0 carries u_x = 0 on x = 0 and u_y = 0 on y = 0 (the lower plate's half of
     the crush is taken by symmetry); the upper plate starts tangent at the crown (0, R_out) and moves

@@ -1,4 +1,4 @@
-"""Line searches along a Newton correction du (docs/theory.md section 7.2).
+"""Line searches along a Newton correction du (docs/theory.md section 7.1).
 
 "residual": the full step if it is admissible and lowers ||R||, otherwise halved (up to
 ``backtracks`` times) until ||R|| <= (1 - 1e-4 alpha) r_old (Armijo), keeping the best admissible
