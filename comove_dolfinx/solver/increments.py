@@ -156,6 +156,7 @@ class IncrementalSolver:
             # a later step of a job: the path's tangent at the state where the last step ended
             # (e.g. the elastic unloading when an obstacle starts to withdraw)
             have_rate = self.newton.load_rate(0.0, rate, 1e-6 * st.t_end)
+        from_start = have_rate          # no chord to check it against: dropped if it fails
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
         while t < st.t_end - tol:
@@ -174,6 +175,8 @@ class IncrementalSolver:
                 passes += 1
             if not ok:
                 m.restore()
+                if from_start:
+                    have_rate = from_start = False
                 cut += 1
                 failed_its += its
                 log.info("  increment to t = %.6g failed (%s)", t_try, reason)
@@ -194,6 +197,7 @@ class IncrementalSolver:
             m.commit()
             past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
             if tangent:
+                from_start = False
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
                              and self._agrees_with_chord(rate, past))
             t_mark = time.perf_counter()
