@@ -182,6 +182,10 @@ class Contact(Item):
         self._e = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))
         S = compat.function_space(msh, "Lagrange", ctx.degree)
         phi = ufl.TestFunction(S)
+        # pressure and shear are projected with linear weights (non-negative hat functions), so a
+        # pressure that the law keeps >= 0 stays >= 0 at the nodes; then interpolated onto S
+        S1 = compat.function_space(msh, "Lagrange", 1)
+        phi1 = ufl.TestFunction(S1)
         F = ctx.update.F(ctx.u)
         N = ufl.FacetNormal(msh)
         N3 = ufl.as_vector([N[0], N[1], 0.0])
@@ -192,13 +196,13 @@ class Contact(Item):
         chi = ufl.conditional(ufl.gt(self.p_ref, 0.0), 1.0, 0.0)
         dsc = self.ds_c
         self._ufl = {"force": -ufl.replace(self.R_c, {ctx.v: self._e}), "mass": phi * dsc,
-                     "extent": chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * dsc,
-                     "p": self.p_ref / stretch * phi * dsc}
+                     "mass1": phi1 * dsc, "extent": chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * dsc,
+                     "p": self.p_ref / stretch * phi1 * dsc}
         if self.mu > 0:
             # reference length of the contact set that slips (friction at its threshold) and sticks
             slipping = ufl.conditional(self._slipping, 1.0, 0.0)
             self._ufl.update(slip=chi * slipping * dsc, stick=chi * (1.0 - slipping) * dsc,
-                             q=self.q_ref / stretch * phi * dsc, p_lag=self._p_lag * phi * dsc)
+                             q=self.q_ref / stretch * phi1 * dsc, p_lag=self._p_lag * phi * dsc)
             if self.method == "penalty":
                 self._ufl["e"] = self._e_new * phi * dsc
         self._compiled = {}
@@ -206,6 +210,9 @@ class Contact(Item):
         self.shear = fem.Function(S, name="contact_shear")
         self._vec = compat.create_vector(self._form("mass"))
         self._lumped = self._assemble_vec(self._form("mass"))
+        self._f1 = fem.Function(S1)
+        self._vec1 = compat.create_vector(self._form("mass1"))
+        self._lumped1 = self._assemble_vec(self._form("mass1"), self._vec1)
         # nodes of the contact boundary (owned), for the contact zone
         fdim = msh.topology.dim - 1
         facets = ctx.facets(self.boundary)
@@ -215,10 +222,24 @@ class Contact(Item):
         self._X = ctx.V.tabulate_dof_coordinates()[self._nodes, :2]
         sdofs = fem.locate_dofs_topological(S, fdim, facets)
         self._sdofs = sdofs[sdofs < S.dofmap.index_map.size_local]
+        self._off = np.ones(S.dofmap.index_map.size_local + S.dofmap.index_map.num_ghosts, dtype=bool)
+        self._off[sdofs] = False                     # dofs away from the contact boundary
         # the boundary field's dof at each of the boundary's nodes (same points, matched by position)
         XS = S.tabulate_dof_coordinates()[:, :2]
         key = {tuple(np.round(x, 12)): i for i, x in enumerate(XS)}
         self._node_sdof = np.array([key.get(tuple(np.round(x, 12)), -1) for x in self._X], dtype=np.int64)
+        s1 = fem.locate_dofs_topological(S1, fdim, facets)
+        self._s1dofs = s1[s1 < S1.dofmap.index_map.size_local]
+
+    @property
+    def nodes(self) -> np.ndarray:
+        """The contact boundary's owned nodes (numbering of the displacement's blocked dofs)."""
+        return self._nodes
+
+    @property
+    def node_sdof(self) -> np.ndarray:
+        """The dof of the boundary fields (``pressure``, ``shear``) at each of ``nodes`` (-1: none)."""
+        return self._node_sdof
 
     def _form(self, name: str):
         """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
@@ -226,10 +247,11 @@ class Contact(Item):
             self._compiled[name] = fem.form(self._ufl[name])
         return self._compiled[name]
 
-    def _assemble_vec(self, form) -> np.ndarray:
-        """Owned entries of an assembled linear form on the boundary field space."""
-        compat.assemble_vector(self._vec, form)
-        return self._vec.array.copy()
+    def _assemble_vec(self, form, vec=None) -> np.ndarray:
+        """Owned entries of an assembled linear form on the boundary field space (or ``vec``'s)."""
+        vec = self._vec if vec is None else vec
+        compat.assemble_vector(vec, form)
+        return vec.array.copy()
 
     def check_start(self) -> None:
         """ContactError if the body already penetrates the obstacle in its initial state."""
@@ -249,14 +271,19 @@ class Contact(Item):
         return out
 
     def update_fields(self) -> None:
-        """Contact pressure and tangential traction (per current area) as boundary fields."""
-        m, b = self._lumped, self._sdofs
+        """Contact pressure and tangential traction (per current area) as boundary fields: lumped
+        projections with the linear hat functions (weights >= 0: the pressure never goes below
+        zero) onto the boundary's vertices, interpolated onto the boundary field space."""
+        m, b, g = self._lumped1, self._s1dofs, self._f1
         for name, f in (("p", self.pressure), ("q", self.shear)):
             if name not in self._ufl:
                 continue
-            vals = self._assemble_vec(self._form(name))
-            f.x.array[:] = 0.0
-            f.x.array[b] = vals[b] / m[b]
+            vals = self._assemble_vec(self._form(name), self._vec1)
+            g.x.array[:] = 0.0
+            g.x.array[b] = vals[b] / m[b]
+            g.x.scatter_forward()
+            f.interpolate(g)
+            f.x.array[self._off] = 0.0                # the interpolation reaches into the cells
             f.x.scatter_forward()
 
     def boundary_values(self, f) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,141 @@
+"""One ParaView dataset per converged increment: ``results.pvd`` and ``results_NNNNN.vtu``.
+
+Every ``.vtu`` holds the whole body on the displacement's mesh (quadratic triangles for P2, so every
+node of the solution is there) with all the fields of that increment, so that ParaView's open ->
+Warp By Vector -> colour by any field works on each time step:
+
+* point data: ``displacement`` (3 components, z = 0, for Warp By Vector) and, for every contact item,
+  ``contact_pressure`` (and ``contact_shear`` with friction): the pressure that the contact law gives,
+  per current area, projected onto the boundary's vertices with non-negative (linear) weights, so it
+  is never negative; zero away from the contact boundary;
+* cell data: ``cauchy_stress_cell_avg`` (3x3, the average over the cell of the stress at its
+  quadrature points; component zz is the out-of-plane or hoop stress), ``von_mises_cell_avg`` (of the
+  averaged stress), ``plastic_strain_cell_avg`` (elastic-plastic bodies) and the fibre stresses
+  (``<name>_cell_avg``).
+
+The collection ``results.pvd`` lists the increments with their time (the job's ``time`` column).
+Rank 0 gathers and writes; each file is written under a temporary name and renamed into place, so
+a run that is killed leaves every increment it converged readable and never half a file.
+"""
+from __future__ import annotations
+
+import os
+import pathlib
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from .. import compat
+from ..parallel import on_root
+from .writers import Writer
+from .xdmf import FibreStress
+
+# dolfinx's P2 triangle: vertices 0, 1, 2, then the edges opposite them (1-2, 0-2, 0-1);
+# VTK's quadratic triangle: vertices, then the edges 0-1, 1-2, 2-0
+_P2_TO_VTK = [0, 1, 2, 5, 3, 4]
+
+
+def _atomic_write(path: pathlib.Path, write) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    write(tmp)
+    os.replace(tmp, path)
+
+
+class VTK(Writer):
+    """The fields of the module docstring at every converged increment, into ``folder``."""
+
+    def __init__(self, folder, name: str = "results", fibres=()):
+        self.folder, self.name, self.fibre_specs = pathlib.Path(folder), name, list(fibres)
+        self.steps: list[tuple[float, str]] = []
+
+    # -- set-up ---------------------------------------------------------------------------------
+    def open(self, run) -> None:
+        m = run.model
+        self.model, self.comm = m, m.comm
+        V = m.V
+        imap = V.dofmap.index_map
+        n_own = imap.size_local
+        self.n_own = n_own
+        gidx = imap.local_to_global(np.arange(n_own, dtype=np.int32))
+        X = V.tabulate_dof_coordinates()[:n_own]
+        tdim = m.mesh.topology.dim
+        n_cells = m.mesh.topology.index_map(tdim).size_local
+        self.n_cells = n_cells
+        cells = compat.cell_dofs(V, n_cells)
+        cells = imap.local_to_global(cells.ravel()).reshape(n_cells, -1)
+        if cells.shape[1] == 6:
+            cells, self.cell_type = cells[:, _P2_TO_VTK], "triangle6"
+        else:
+            self.cell_type = "triangle"
+        parts = self.comm.gather((gidx, X, cells), root=0)
+        if self.comm.rank == 0:
+            n = imap.size_global
+            self.points = np.zeros((n, 3))
+            for g, x, _ in parts:
+                self.points[g] = x
+            self.cells = np.concatenate([c for _, _, c in parts])
+        self.fibres = [FibreStress(m, name, A) for name, A in self.fibre_specs]
+        self.contacts = [item for item in m.items if item.kind == "contact"]
+        on_root(self.comm, self.folder.mkdir, parents=True, exist_ok=True)
+
+    # -- each increment -------------------------------------------------------------------------
+    def _gather_points(self, values: np.ndarray) -> np.ndarray | None:
+        """Owned nodal values (n_own, k) of the displacement's numbering -> global array on rank 0."""
+        imap = self.model.V.dofmap.index_map
+        gidx = imap.local_to_global(np.arange(self.n_own, dtype=np.int32))
+        parts = self.comm.gather((gidx, values), root=0)
+        if self.comm.rank != 0:
+            return None
+        out = np.zeros((imap.size_global, values.shape[1]))
+        for g, v in parts:
+            out[g] = v
+        return out
+
+    def _gather_cells(self, values: np.ndarray) -> np.ndarray | None:
+        parts = self.comm.gather(values[: self.n_cells], root=0)
+        return np.concatenate(parts) if self.comm.rank == 0 else None
+
+    def _boundary_field(self, contact, f) -> np.ndarray:
+        """A contact output field (on the boundary's nodes) as values at the displacement's nodes."""
+        out = np.zeros((self.n_own, 1))
+        ok = contact.node_sdof >= 0
+        out[contact.nodes[ok], 0] = f.x.array[contact.node_sdof[ok]]
+        return out
+
+    def write(self, run, row, increment) -> None:
+        m, rule = self.model, self.model.rule
+        u = m.u.x.array.reshape(-1, 2)[: self.n_own]
+        point = {"displacement": np.hstack([u, np.zeros((self.n_own, 1))])}
+        for k, c in enumerate(self.contacts):
+            suffix = f"_{k + 1}" if len(self.contacts) > 1 else ""
+            c.update_fields()
+            point[f"contact_pressure{suffix}"] = self._boundary_field(c, c.pressure)
+            if c.mu > 0:
+                point[f"contact_shear{suffix}"] = self._boundary_field(c, c.shear)
+        sig = rule.cell_average(m.cauchy_stress())            # (cells, 4): xx, yy, zz, xy
+        T = np.zeros((sig.shape[0], 3, 3))
+        T[:, 0, 0], T[:, 1, 1], T[:, 2, 2] = sig[:, 0], sig[:, 1], sig[:, 2]
+        T[:, 0, 1] = T[:, 1, 0] = sig[:, 3]
+        s = T - np.trace(T, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+        cell = {"cauchy_stress_cell_avg": T.reshape(-1, 9),
+                "von_mises_cell_avg": np.sqrt(1.5 * np.einsum("cij,cij->c", s, s))}
+        if m.plastic is not None:
+            cell["plastic_strain_cell_avg"] = rule.cell_average(m.p.x.array)
+        for f in self.fibres:
+            cell[f"{f.function.name}_cell_avg"] = f.values()
+        point = {k: self._gather_points(v) for k, v in point.items()}
+        cell = {k: self._gather_cells(v) for k, v in cell.items()}
+        index = len(self.steps)
+        fname = f"{self.name}_{index:05d}.vtu"
+        self.steps.append((float(row["time"]), fname))
+        on_root(self.comm, self._write_files, fname, point, cell)
+
+    def _write_files(self, fname, point, cell) -> None:
+        import meshio
+        mesh = meshio.Mesh(self.points, [(self.cell_type, self.cells)], point_data=point,
+                           cell_data={k: [v] for k, v in cell.items()})
+        _atomic_write(self.folder / fname, lambda p: meshio.write(p, mesh, file_format="vtu"))
+        lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1">', "<Collection>"]
+        lines += [f'  <DataSet timestep="{t:.12g}" part="0" file={quoteattr(f)}/>' for t, f in self.steps]
+        lines += ["</Collection>", "</VTKFile>", ""]
+        _atomic_write(self.folder / f"{self.name}.pvd", lambda p: p.write_text("\n".join(lines)))
