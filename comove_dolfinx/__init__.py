@@ -33,7 +33,7 @@ _API = {
     "job": ("Step", "Job", "Results", "JobError"),
     "solver": ("NewtonSettings",),
     "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "Reaction", "MaxPlasticStrain", "Value"),
-    "io": ("Writer", "HistoryCSV", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),
+    "io": ("Writer", "HistoryCSV", "VTK", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),
     "presets": ("get_scene", "SCENES"),
 }
 _WHERE = {name: module for module, names in _API.items() for name in names}

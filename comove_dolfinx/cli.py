@@ -36,14 +36,14 @@ def _verbose(comm) -> None:
 
 
 def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None):
-    """Run a preset ``scene`` into ``out_dir`` (history.csv, results.xdmf, run.json, the console's
+    """Run a preset ``scene`` into ``out_dir`` (history.csv, results.pvd with one .vtu per increment, run.json, the console's
     lines); returns the :class:`Results`. ``newton``: settings instead of the scene's."""
     import dataclasses
     import pathlib
 
     from mpi4py import MPI
 
-    from .io import XDMF, Console, HistoryCSV, RunInfo
+    from .io import VTK, Console, HistoryCSV, RunInfo
     from .parallel import on_root
     from .solver import Timer
 
@@ -53,7 +53,7 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None):
     timer = Timer()
     with timer("mesh"):
         md = scene.mesh_data(comm)
-    writers = [HistoryCSV(out / "history.csv"), XDMF(out / "results.xdmf", scene.fibres()),
+    writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
                RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
                Console(scene.name, scene.columns)]
     job = scene.job(md, writers)
@@ -81,14 +81,14 @@ def run_problem(path, out_dir, comm=None, progress: bool = False):
     from mpi4py import MPI
 
     from . import problem
-    from .io import XDMF, Console, HistoryCSV, RunInfo
+    from .io import VTK, Console, HistoryCSV, RunInfo
     from .parallel import on_root
 
     comm = comm or MPI.COMM_WORLD
     data = problem.read(path)
     out = pathlib.Path(out_dir)
     on_root(comm, out.mkdir, parents=True, exist_ok=True)
-    writers = [HistoryCSV(out / "history.csv"), XDMF(out / "results.xdmf"),
+    writers = [HistoryCSV(out / "history.csv"), VTK(out),
                RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem)]
     return problem.build(data, comm, writers).run(progress=progress)
 

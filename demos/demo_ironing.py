@@ -89,7 +89,7 @@ class PressureProfile(cm.Writer):
 
 profile = PressureProfile()
 job = cm.Job(body, items, steps, probes,
-             writers=[cm.HistoryCSV(out / "history.csv"), cm.XDMF(out / "results.xdmf"), profile])
+             writers=[cm.HistoryCSV(out / "history.csv"), cm.VTK(out), profile])
 
 # %%
 if comm.rank == 0:
@@ -191,5 +191,5 @@ if comm.rank == 0:
     if len(sliding):
         print(f"Coulomb in full slip ({len(sliding)} increments): T / (mu N) from {ratio_T.min():.4f} "
               f"to {ratio_T.max():.4f} (tolerance 3 %)")
-    print(f"{res.message}; {'OK' if ok else 'FAILED'}: ParaView {out / 'results.xdmf'}")
+    print(f"{res.message}; {'OK' if ok else 'FAILED'}: ParaView {out / 'results.pvd'}")
 sys.exit(0 if ok else 1)

@@ -48,7 +48,7 @@ probes = [cm.NodeDisplacement("centre", (0.0, 0.0), component=1, column="center_
           cm.ContactLength(base, "contact_radius"), cm.ContactForce(base)]
 snaps = cm.Snapshots([0.2 * p, 0.5 * p, p])
 job = cm.Job(body, items, [cm.Step(20)], probes, load=lambda s: p * s,
-             writers=[cm.HistoryCSV(out / "history.csv"), cm.XDMF(out / "results.xdmf"), snaps])
+             writers=[cm.HistoryCSV(out / "history.csv"), cm.VTK(out), snaps])
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 res = job.run(progress=True)

@@ -22,7 +22,7 @@ def read_history(path):
 def _demo(name, out, args=(), n=1, pictures=None):
     p = launch.run([DEMOS / f"demo_{name}.py", "--out", out, *args], n=n)
     assert p.returncode == 0, p.stdout + p.stderr
-    for f in ["results.xdmf", "results.h5", "history.csv", *(pictures or [f"{name}_shapes.png",
+    for f in ["results.pvd", "results_00000.vtu", "history.csv", *(pictures or [f"{name}_shapes.png",
                                                                          f"{name}_curves.png"])]:
         assert (out / f).is_file(), f
     return p.stdout, read_history(out / "history.csv")

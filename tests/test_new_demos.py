@@ -27,7 +27,7 @@ def _demo(name, out):
     p = launch.run([DEMOS / f"demo_{name}.py", "--out", out])
     assert p.returncode == 0, p.stdout + p.stderr
     assert "OK" in p.stdout, p.stdout
-    for f in ["history.csv", "results.xdmf", "results.h5", f"{name}.png"]:
+    for f in ["history.csv", "results.pvd", "results_00000.vtu", f"{name}.png"]:
         assert (out / f).is_file(), f
     return read_history(out / "history.csv")
 

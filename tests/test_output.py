@@ -64,48 +64,62 @@ def test_hoop_stress_of_a_pressurised_tube_is_lame(mpi_tmp):
     np.testing.assert_allclose(radial, radial_exact, atol=1e-3 * k * (1 + b ** 2 / a ** 2))  # 2.8e-4
 
 
-_READ_H5 = """
-import json, sys
-import h5py, numpy as np
-with h5py.File(sys.argv[1], "r") as f:
-    X = f["Mesh/mesh/geometry"][:]
-    cells = f["Mesh/mesh/topology"][:]
-    fields = {k: sorted(f["Function"][k].keys(), key=lambda t: float(t.replace("_", ".")))
-              for k in f["Function"]}
-    u = f["Function/displacement"][fields["displacement"][-1]][:]
-print(json.dumps({"X": X.tolist(), "ncells": len(cells), "nodes_per_cell": cells.shape[1],
-                  "vertices": len(np.unique(cells[:, :3])),
-                  "fields": {k: len(v) for k, v in fields.items()}, "u": u.tolist()}))
-"""
+def _pvd(folder):
+    """The (time, file) pairs of a results.pvd, read as XML."""
+    import xml.etree.ElementTree as ET
+    root = ET.parse(folder / "results.pvd").getroot()
+    return [(float(d.get("timestep")), folder / d.get("file")) for d in root.iter("DataSet")]
 
 
 @pytest.mark.parametrize("n", [1, 2])
-def test_xdmf_keeps_every_p2_node(tmp_path, n):
-    """The elastica's XDMF, read back with h5py in a process of its own: a 6-node triangle mesh with
-    every P2 node (vertices + edges of the mesh), one time step per converged increment for every field,
-    and the displacement of the tip node equal to the history's, on one rank and on two."""
-    import json
-    import subprocess
-    import sys
+def test_vtk_keeps_every_p2_node_and_all_fields_in_one_dataset(tmp_path, n):
+    """The elastica's results read back with meshio: one .vtu per converged increment, listed in the
+    .pvd with increasing times; each a 6-node triangle mesh with every P2 node (vertices + edges of
+    the mesh) holding every field (so ParaView warps and colours one dataset); the tip node's
+    displacement equal to the history's, on one rank and on two."""
+    import meshio
 
     from test_elastica import _cli, read_history
     out = tmp_path / "run"
     p = _cli(["run", "elastica", "--no-progress", "--out", str(out), "--set", "n_steps=3",
               "--set", "lam=2", "--set", "size=0.25"], n=n)
     assert p.returncode == 0, p.stdout + p.stderr
-    r = subprocess.run([sys.executable, "-c", _READ_H5, str(out / "results.h5")],
-                       capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0, r.stderr
-    data = json.loads(r.stdout)
     hist = read_history(out / "history.csv")
-    X, u = np.array(data["X"]), np.array(data["u"])
-    assert data["nodes_per_cell"] == 6
+    steps = _pvd(out)
+    assert len(steps) == len(hist) and all(a[0] < b[0] for a, b in zip(steps, steps[1:]))
+    m = meshio.read(steps[-1][1])
+    cells = m.cells_dict["triangle6"]
+    vertices = len(np.unique(cells[:, :3]))
     # Euler on a triangulated rectangle: edges = vertices + cells - 1, and a node on every vertex and edge
-    assert len(X) == 2 * data["vertices"] + data["ncells"] - 1 > 2 * data["vertices"]
-    for name in ("displacement", "cauchy_stress", "von_mises", "fibre_stress"):
-        assert data["fields"][name] == len(hist), name
-    tip = np.argmin(np.linalg.norm(X[:, :2] - [10.0, 0.125], axis=1))
-    assert u[tip][:2] == pytest.approx([hist[-1]["tip_ux"], hist[-1]["tip_uy"]], rel=1e-9)
+    assert len(m.points) == 2 * vertices + len(cells) - 1 > 2 * vertices
+    assert set(m.point_data) == {"displacement"}
+    assert set(m.cell_data) == {"cauchy_stress_cell_avg", "von_mises_cell_avg", "fibre_stress_cell_avg"}
+    assert m.cell_data["cauchy_stress_cell_avg"][0].shape == (len(cells), 9)
+    tip = np.argmin(np.linalg.norm(m.points[:, :2] - [10.0, 0.125], axis=1))
+    u = m.point_data["displacement"][tip]
+    assert u[:2] == pytest.approx([hist[-1]["tip_ux"], hist[-1]["tip_uy"]], rel=1e-9) and u[2] == 0.0
+
+
+def test_vtk_contact_pressure_is_the_contact_law(tmp_path):
+    """The block of the next test, written as VTK: the contact pressure is q at every node of the
+    bottom face (to 1e-8), exactly 0 at every other node, never negative."""
+    import meshio
+
+    q = 20.0
+    md = geometry.rectangle(2.0, 1.0, 0.25, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
+    c = cm.Contact("bottom", cm.Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
+    res = cm.Job(cm.Body(md, "plane_stress", cm.Elastic(1000.0, 0.3)),
+                 [cm.Fixed("left", component=0), cm.Pressure("top", q), c], [cm.Step(2)],
+                 writers=[cm.VTK(tmp_path / "out")]).run()
+    assert res.completed
+    steps = _pvd(tmp_path / "out")
+    assert len(steps) == 2
+    m = meshio.read(steps[-1][1])
+    X, p = m.points, m.point_data["contact_pressure"].ravel()
+    bottom = np.abs(X[:, 1]) < 1e-12
+    assert bottom.sum() == 17                               # 8 P2 edges: 9 vertices + 8 mid-nodes
+    np.testing.assert_allclose(p[bottom], q, rtol=1e-8)
+    assert np.all(p[~bottom] == 0.0) and np.all(p >= 0.0)
 
 
 _READ_CONTACT = """

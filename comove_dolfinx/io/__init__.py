@@ -6,7 +6,8 @@ at the end, also after a failure. Every rank calls them; a failure on one rank s
 """
 from .plots import Snapshots, draw_plane, snapshot_grid
 from .writers import Console, HistoryCSV, RunInfo, Writer, read_history
+from .vtk import VTK
 from .xdmf import XDMF, FibreStress
 
-__all__ = ["XDMF", "Console", "FibreStress", "HistoryCSV", "RunInfo", "Snapshots", "Writer", "draw_plane",
+__all__ = ["VTK", "XDMF", "Console", "FibreStress", "HistoryCSV", "RunInfo", "Snapshots", "Writer", "draw_plane",
            "read_history", "snapshot_grid"]
