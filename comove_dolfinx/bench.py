@@ -112,7 +112,7 @@ def _run(name: str, sets: list[str], out: pathlib.Path, tag: str,
     from .cli import run_scene
     scene = get_scene(name, sets)
     folder = out / "runs" / tag
-    run_scene(scene, folder, progress=False, newton=newton)
+    run_scene(scene, folder, progress=False, newton=newton, overwrite=True)
     MPI.COMM_WORLD.barrier()
     info = json.loads((folder / "run.json").read_text())
     with open(folder / "history.csv") as fh:

@@ -35,46 +35,46 @@ def _verbose(comm) -> None:
     logging.getLogger().setLevel(logging.WARNING)
 
 
-def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None):
-    """Run a preset ``scene`` into ``out_dir`` (history.csv, results.pvd with one .vtu per increment, run.json, the console's
-    lines); returns the :class:`Results`. ``newton``: settings instead of the scene's."""
+def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, overwrite: bool = False):
+    """Run a preset ``scene`` into the folder ``out_dir`` (history.csv, results.pvd with one .vtu per
+    increment, run.json, the console's lines); returns the :class:`Results`. ``newton``: settings
+    instead of the scene's; ``overwrite``: replace the results of an earlier run there."""
     import dataclasses
     import pathlib
 
     from mpi4py import MPI
 
     from .io import VTK, Console, HistoryCSV, RunInfo
-    from .parallel import on_root
-    from .solver import Timer
+    from .io.folder import RunFolder
 
     comm = comm or MPI.COMM_WORLD
     out = pathlib.Path(out_dir)
-    on_root(comm, out.mkdir, parents=True, exist_ok=True)
-    timer = Timer()
-    with timer("mesh"):
+    with RunFolder(out, overwrite, comm):
         md = scene.mesh_data(comm)
-    writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
-               RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
-               Console(scene.name, scene.columns)]
-    job = scene.job(md, writers)
-    if newton is not None:
-        job.newton = newton
-    return job.run(progress=progress)
+        writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
+                   RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
+                   Console(scene.name, scene.columns)]
+        job = scene.job(md, writers)
+        if newton is not None:
+            job.newton = newton
+        return job.run(progress=progress)
 
 
 def _errors():
     from .contact import ContactError
     from .geometry import MeshError
+    from .io.folder import FolderError
     from .job import JobError
     from .loads import ItemError
     from .mechanics.body import BodyError
     from .mechanics.material_data import MaterialError
     from .presets import SceneError
     from .probes import ProbeError
-    return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError)
+    return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError,
+            FolderError)
 
 
-def run_problem(path, out_dir, comm=None, progress: bool = False):
+def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: bool = False):
     """Run a problem file (problem.py) into ``out_dir``, with the writers of the scenes."""
     import pathlib
 
@@ -82,18 +82,24 @@ def run_problem(path, out_dir, comm=None, progress: bool = False):
 
     from . import problem
     from .io import VTK, Console, HistoryCSV, RunInfo
-    from .parallel import on_root
+    from .io.folder import RunFolder
 
     comm = comm or MPI.COMM_WORLD
     data = problem.read(path)
     out = pathlib.Path(out_dir)
-    on_root(comm, out.mkdir, parents=True, exist_ok=True)
-    writers = [HistoryCSV(out / "history.csv"), VTK(out),
-               RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem)]
-    return problem.build(data, comm, writers).run(progress=progress)
+    with RunFolder(out, overwrite, comm):
+        writers = [HistoryCSV(out / "history.csv"), VTK(out),
+                   RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem)]
+        return problem.build(data, comm, writers).run(progress=progress)
+
+
+def _on_sigterm(signum, frame):
+    raise KeyboardInterrupt("SIGTERM")
 
 
 def _run(args) -> int:
+    import signal
+
     from mpi4py import MPI
 
     from .presets import get_scene
@@ -101,33 +107,37 @@ def _run(args) -> int:
 
     comm = MPI.COMM_WORLD
     errors = _errors() + (ProblemError,)
-    if args.scene.endswith(".toml"):
-        if args.set:
-            print("comove: --set applies to scenes; edit the problem file instead", file=sys.stderr)
-            return 2
-        if args.verbose:
-            _verbose(comm)
-        try:
-            result = run_problem(args.scene, args.out, progress=not args.no_progress)
-        except errors as err:
-            if comm.rank == 0:
-                print(f"comove: {err}", file=sys.stderr)
-            return 2
-        return 0 if result.completed else 1
-    try:
-        scene = get_scene(args.scene, args.set)
-    except errors as err:
+    problem = args.scene.endswith(".toml")
+
+    def fail(err) -> int:
         if comm.rank == 0:
             print(f"comove: {err}", file=sys.stderr)
         return 2
+
+    if problem and args.set:
+        return fail("--set applies to scenes; edit the problem file instead")
+    try:
+        scene = None if problem else get_scene(args.scene, args.set)
+    except errors as err:
+        return fail(err)
     if args.verbose:
         _verbose(comm)
+    signal.signal(signal.SIGTERM, _on_sigterm)
     try:
-        result = run_scene(scene, args.out, progress=not args.no_progress)
+        if problem:
+            result = run_problem(args.scene, args.out, progress=not args.no_progress, overwrite=args.overwrite)
+        else:
+            result = run_scene(scene, args.out, progress=not args.no_progress, overwrite=args.overwrite)
     except errors as err:
+        return fail(err)
+    except KeyboardInterrupt as err:
+        why = str(err) or "Ctrl-C"
         if comm.rank == 0:
-            print(f"comove: {err}", file=sys.stderr)
-        return 2
+            print(f"comove: interrupted ({why}); every converged increment is in {args.out} "
+                  "(run.json says how far it got)", file=sys.stderr)
+        return 143 if why == "SIGTERM" else 130
+    if not result.completed and comm.rank == 0:
+        print(f"comove: {result.message}", file=sys.stderr)
     return 0 if result.completed else 1
 
 
@@ -143,6 +153,8 @@ def main(argv=None) -> int:
                      help="override a scene parameter (repeatable)")
     run.add_argument("-v", "--verbose", action="store_true", help="log every Newton iteration")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace the results of an earlier run in the --out folder")
     sub.add_parser("scenes", help="list the scenes and their parameters with defaults")
     args = parser.parse_args(argv)
     _quiet_jit()

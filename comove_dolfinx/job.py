@@ -95,6 +95,7 @@ class Results:
     timing: dict = field(default_factory=dict)
     timing_report: str = ""
     contact: dict = field(default_factory=dict)
+    interrupted: bool = False       # by a signal or Ctrl-C (the exception goes on after the writers)
 
     def __getitem__(self, column: str) -> np.ndarray:
         if column not in self.columns:
@@ -202,6 +203,10 @@ class Job:
             else:
                 res.completed = True
                 res.message = f"completed {len(res.rows)} increments"
+        except KeyboardInterrupt as err:
+            res.interrupted = True
+            res.message = f"interrupted ({err or 'Ctrl-C'}) after {len(res.rows)} converged increments"
+            raise
         finally:
             bar.close()
             res.wall_s = time.perf_counter() - t_start

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import pathlib
 
 import numpy as np
@@ -70,20 +71,46 @@ def read_history(path, origin: bool = False) -> dict[str, np.ndarray]:
     return {k: np.array(lead + [float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
 
 
+def write_atomic(path: pathlib.Path, text: str) -> None:
+    """Write a file under a temporary name and rename it into place: a reader (or a kill) never
+    sees half of it."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
 class RunInfo(Writer):
     """``path`` (JSON): the job's parameters, outcome, increments, Newton iterations, timing and,
-    with contact, the load at first contact and the largest penetration."""
+    with contact, the load at first contact and the largest penetration. Written when the run
+    starts (``"status": "running"``) and after every increment, so that a run that is killed leaves
+    a summary that says it is incomplete; at the end ``"status"`` is ``"completed"``, ``"stopped"``
+    (an increment could not be solved) or ``"interrupted"``."""
 
     def __init__(self, path, parameters: dict | None = None):
         self.path, self.parameters = pathlib.Path(path), parameters or {}
+        self.rows = 0
+
+    def _info(self, run, status: str, message: str, results=None) -> str:
+        info = {"parameters": self.parameters, "status": status, "completed": status == "completed",
+                "message": message, "increments": self.rows, "ranks": run.comm.size}
+        if results is not None:
+            info.update(increments=len(results.increments), newton_its=results.newton_its,
+                        failed_its=results.failed_its, dofs=results.dofs, wall_s=results.wall_s,
+                        timing=results.timing, **results.contact)
+        return json.dumps(info, indent=1, default=str)
+
+    def open(self, run) -> None:
+        on_root(run.comm, write_atomic, self.path, self._info(run, "running", "the run is going on"))
+
+    def write(self, run, row, increment) -> None:
+        self.rows += 1
+        on_root(run.comm, write_atomic, self.path,
+                self._info(run, "running", f"converged up to increment {row['step']} (time {row['time']:.6g})"))
 
     def close(self, run, results) -> None:
-        info = {"parameters": self.parameters, "completed": results.completed,
-                "message": results.message, "increments": len(results.increments),
-                "newton_its": results.newton_its, "failed_its": results.failed_its,
-                "dofs": results.dofs, "ranks": run.comm.size, "wall_s": results.wall_s,
-                "timing": results.timing, **results.contact}
-        on_root(run.comm, self.path.write_text, json.dumps(info, indent=1))
+        status = ("completed" if results.completed else
+                  "interrupted" if results.interrupted else "stopped")
+        on_root(run.comm, write_atomic, self.path, self._info(run, status, results.message, results))
 
 
 class Console(Writer):

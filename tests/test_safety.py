@@ -1,0 +1,98 @@
+"""Runs that are killed, interrupted or pointed at a folder in use: every converged increment stays
+readable (history, one .vtu per increment, a run.json that says the run is incomplete), SIGTERM and
+Ctrl-C end with one line and their exit codes, and no run writes into another's folder or mixes its
+files with an earlier run's."""
+import csv
+import json
+import os
+import signal
+import subprocess
+import time
+import xml.etree.ElementTree as ET
+
+import launch
+import pytest
+
+RUN = ["-m", "comove_dolfinx.cli", "run"]
+
+
+def _rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _start(out, scene="ring", sets=("n_steps=200",)):
+    args = [*RUN, scene, "--out", out, "--no-progress"]
+    for s in sets:
+        args += ["--set", s]
+    return subprocess.Popen(launch.command(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=launch.ENV)
+
+
+def _wait_rows(p, history, n, timeout=300):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if history.exists() and len(_rows(history)) >= n:
+            return
+        assert p.poll() is None, p.communicate()
+        time.sleep(0.05)
+    raise AssertionError("the run did not converge enough increments in time")
+
+
+def _check_readable(out):
+    """Every increment listed in the .pvd reads back; the history's rows are complete."""
+    import meshio
+    rows = _rows(out / "history.csv")
+    files = [d.get("file") for d in ET.parse(out / "results.pvd").getroot().iter("DataSet")]
+    assert len(files) >= len(rows) - 1 >= 1          # the last row may precede its dataset
+    for f in files:
+        m = meshio.read(out / f)
+        assert "displacement" in m.point_data and "plastic_strain_cell_avg" in m.cell_data
+    for r in rows:
+        assert all(v not in (None, "") for v in r.values()), r
+    return rows, json.loads((out / "run.json").read_text())
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT])
+def test_killed_or_interrupted_run_keeps_its_increments(tmp_path, sig):
+    out = tmp_path / "run"
+    p = _start(out)
+    _wait_rows(p, out / "history.csv", 4)
+    p.send_signal(sig)
+    stdout, stderr = p.communicate(timeout=120)
+    rows, info = _check_readable(out)
+    assert not info["completed"]
+    if sig == signal.SIGKILL:
+        assert p.returncode == -signal.SIGKILL
+        assert info["status"] == "running"                 # it never got to say more
+    else:
+        assert p.returncode == (143 if sig == signal.SIGTERM else 130), stderr
+        assert info["status"] == "interrupted" and info["increments"] == len(rows)
+        assert "Traceback" not in stderr and len(stderr.strip().splitlines()) == 1, stderr
+        assert "interrupted" in stderr
+
+
+def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
+    out = tmp_path / "run"
+    first = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=4"])
+    assert first.returncode == 0, first.stderr
+    again = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=2"])
+    assert again.returncode == 2 and "--overwrite" in again.stderr and "Traceback" not in again.stderr
+    assert len(_rows(out / "history.csv")) == 4                       # untouched
+    over = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=2",
+                       "--overwrite"])
+    assert over.returncode == 0, over.stderr
+    assert len(_rows(out / "history.csv")) == 2
+    assert sorted(f.name for f in out.glob("results_*.vtu")) == ["results_00000.vtu", "results_00001.vtu"]
+    # a live run's lock (this test's own process) is refused; a dead one's is taken over
+    (out / ".lock").write_text(f"{os.getpid()}\n")
+    busy = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite"])
+    assert busy.returncode == 2 and "another run" in busy.stderr
+    (out / ".lock").write_text("999999999\n")
+    stale = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite", "--set", "n_steps=1"])
+    assert stale.returncode == 0, stale.stderr
+    assert not (out / ".lock").exists()
+    afile = tmp_path / "a_file"
+    afile.write_text("x")
+    bad = launch.run([*RUN, "elastica", "--out", afile, "--no-progress"])
+    assert bad.returncode == 2 and "not a folder" in bad.stderr
