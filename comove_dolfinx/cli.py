@@ -157,10 +157,43 @@ def main(argv=None) -> int:
                      help="replace the results of an earlier run in the --out folder")
     sub.add_parser("scenes", help="list the scenes and their parameters with defaults")
     args = parser.parse_args(argv)
+    if args.command == "run":
+        err = _check_early(args)
+        if err is not None:
+            if _rank() == 0:
+                print(f"comove: {err}", file=sys.stderr)
+            return 2
     _quiet_jit()
     from . import check_platform
     check_platform()
     return _scenes() if args.command == "scenes" else _run(args)
+
+
+def _rank() -> int:
+    """This process's MPI rank from the launcher's environment (before MPI is loaded)."""
+    import os
+    for var in ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"):
+        if var in os.environ:
+            return int(os.environ[var])
+    return 0
+
+
+def _check_early(args):
+    """The run's arguments checked before dolfinx is loaded: the scene and its parameters, or the
+    problem file, and the output folder's name. The message, or None."""
+    from .mechanics.material_data import MaterialError
+    from .presets import SceneError, get_scene
+    from .problem import ProblemError, read
+    if not args.out.strip():
+        return "--out '': give the output folder"
+    try:
+        if args.scene.endswith(".toml"):
+            read(args.scene)
+        else:
+            get_scene(args.scene, args.set)
+    except (SceneError, MaterialError, ProblemError) as err:
+        return err
+    return None
 
 
 if __name__ == "__main__":

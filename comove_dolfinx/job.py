@@ -26,10 +26,16 @@ import numpy as np
 from tqdm import tqdm
 
 from .mechanics.model import Model
+from .names import PREDICTORS
 from .parallel import collective
-from .solver import IncrementalSolver, Newton, NewtonSettings, RunResult, StepSettings, Timer
-
-PREDICTORS = {"none": False, "linear": 1, "quadratic": 2, "tangent": "tangent"}
+from .solver import (
+    IncrementalSolver,
+    Newton,
+    NewtonSettings,
+    RunResult,
+    StepSettings,
+    Timer,
+)
 
 
 class JobError(ValueError):

@@ -76,3 +76,33 @@ def test_scenes_listing(capsys):
     out = capsys.readouterr().out
     for word in ("elastica", "beam", "plate", "q_max", "p_max", "lam"):
         assert word in out
+
+
+def test_the_names_checked_early_are_those_implemented():
+    """Scene parameters are checked against comove_dolfinx.names before dolfinx is loaded; the
+    modules that implement the choices must offer exactly those names."""
+    from comove_dolfinx import names
+    from comove_dolfinx.mechanics import kinematics, materials, updates
+    assert set(updates.UPDATES) == set(names.UPDATES)
+    assert set(materials.LAWS) == set(names.LAWS)
+    assert set(kinematics.MODELS) == set(names.MODELS)
+
+
+BAD_EARLY = [("ring", "E=-1", "E = -1.0"), ("ring", "size=inf", "size = inf"), ("beam", "L=inf", "L = inf"),
+             ("beam", "mu=inf", "mu = inf"), ("beam", "mu=nan", "mu = nan"), ("beam", "gamma0=inf", "gamma0 = inf"),
+             ("beam", "q_max=nan", "q_max = nan"), ("ring", "n_steps=100000000000000000000", "1000000"),
+             ("ring", "nu=0.5", "nu = 0.5"), ("ring", "hardening=0:2800,0.1:2000", "non-decreasing"),
+             ("elastica", "mesh=nowhere.msh", "nowhere.msh")]
+
+
+@pytest.mark.parametrize("scene, pair, words", BAD_EARLY)
+def test_bad_values_refused_before_dolfinx_is_loaded(tmp_path, scene, pair, words):
+    """One line naming the value, exit code 2, and dolfinx never imported (so it is quick)."""
+    import subprocess
+    import sys
+    code = ("import sys; from comove_dolfinx import cli; rc = cli.main(sys.argv[1:]); "
+            "assert 'dolfinx' not in sys.modules, 'dolfinx was imported'; sys.exit(rc)")
+    p = subprocess.run([sys.executable, "-c", code, "run", scene, "--set", pair, "--out", str(tmp_path)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr

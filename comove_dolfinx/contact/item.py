@@ -24,6 +24,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .. import compat
+from ..names import CONTACT_METHODS as METHODS
 from ..loads import Item
 from . import laws
 from .obstacles import ContactError, Obstacle
@@ -66,7 +67,7 @@ class Contact(Item):
                  gamma0: float = 100.0, theta: int = 0, mu: float = 0.0, relag: bool = False,
                  max_passes: int = 10, relag_tol: float = 1e-4):
         super().__init__(boundary)
-        if method not in laws.METHODS:
+        if method not in METHODS:
             raise ContactError(f"contact method {method!r} is unknown: choose penalty or nitsche")
         if not (np.isfinite(gamma0) and gamma0 > 0):
             raise ContactError(f"gamma0 = {gamma0} must be a finite number > 0")

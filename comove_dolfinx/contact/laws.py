@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import ufl
 
-METHODS = ("penalty", "nitsche")
-
 
 def positive_part(x):
     """[x]_+, active at x = 0: a body that just touches gets contact stiffness at once."""

@@ -4,12 +4,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..names import PLASTIC_UPDATES as ROTATING_UPDATES  # noqa: E402  (they carry a rotated old stress)
 from .kinematics import MODELS
 from .material_data import Elastic, MaterialError
 from .materials import Plastic
 from .updates import UPDATES
-
-ROTATING_UPDATES = ("sr", "hughes_winget")      # those that carry a rotated old stress (plasticity)
 
 
 class BodyError(ValueError):

@@ -12,12 +12,14 @@ import dataclasses
 from dataclasses import dataclass
 from typing import ClassVar
 
-from .. import geometry
-from ..contact import METHODS, Contact
-from ..job import PREDICTORS, Job, Step
+import math
+import os
+
 from ..mechanics.material_data import Elastic
-from ..mechanics.updates import UPDATES
-from ..solver import NewtonSettings
+from ..names import CONTACT_METHODS as METHODS
+from ..names import PREDICTORS, UPDATES
+
+# dolfinx, gmsh and the rest are imported by the methods that build: checking parameters stays light
 
 
 class SceneError(ValueError):
@@ -59,7 +61,17 @@ class Scene:
     # -- parameters --------------------------------------------------------------------------
     def validate(self) -> None:
         """Raise SceneError (or MaterialError) naming any unusable value and the fix."""
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, float) and not math.isfinite(v):
+                raise SceneError(f"{f.name} = {v}: give a finite number")
+        if not 1 <= self.n_steps <= 1_000_000:
+            raise SceneError(f"n_steps = {self.n_steps}: give a number of increments from 1 to 1000000")
+        if not 0 <= self.max_cutbacks <= 30:
+            raise SceneError(f"max_cutbacks = {self.max_cutbacks}: give a number from 0 to 30")
         self.elastic()
+        if self.mesh and not os.path.isfile(self.mesh):
+            raise SceneError(f"mesh = {self.mesh!r}: no such file; give the path of a Gmsh .msh file")
         if self.update not in UPDATES:
             raise SceneError(f"update = {self.update!r} is unknown: choose one of {', '.join(UPDATES)}")
         if self.degree not in (1, 2):
@@ -110,6 +122,7 @@ class Scene:
 
     # -- the job ---------------------------------------------------------------------------
     def load_msh(self, comm, required):
+        from .. import geometry
         return geometry.load_msh(self.mesh, comm, required=required)
 
     def mesh_data(self, comm):  # pragma: no cover - interface
@@ -128,16 +141,19 @@ class Scene:
         """(name, reference direction) of the fibres whose normal stress goes to the XDMF output."""
         return []
 
-    def newton_settings(self) -> NewtonSettings:
+    def newton_settings(self):
         """Newton settings of the scene (the solver's defaults unless a scene needs others)."""
+        from ..solver import NewtonSettings
         return NewtonSettings()
 
-    def steps(self) -> list[Step]:
+    def steps(self) -> list:
         """One step: every item from 0 to 1 in n_steps nominal increments."""
+        from ..job import Step
         return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks)]
 
-    def job(self, md, writers=()) -> Job:
+    def job(self, md, writers=()):
         """The scene as a job on the mesh ``md`` (history ``load`` = load factor x load_max)."""
+        from ..job import Job
         body, items, probes = self.build(md)
         self.items = items
         return Job(body, items, self.steps(), probes, writers, newton=self.newton_settings(),
@@ -189,8 +205,9 @@ class ContactScene(Scene):
         if not self.gap >= 0:
             raise SceneError(f"gap = {self.gap}: the obstacle must not start inside the body (gap >= 0)")
 
-    def contact_item(self, boundary: str, obstacle) -> Contact | None:
+    def contact_item(self, boundary: str, obstacle):
         """The contact item of the scene's parameters (None when contact = off)."""
+        from ..contact import Contact
         if self.contact == "off":
             return None
         return Contact(boundary, obstacle, method=self.contact, gamma0=self.gamma0, theta=self.theta,

@@ -4,17 +4,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-import ufl
-
-from .. import geometry
-from ..contact import Plane
-from ..loads import Fixed, Pressure, Traction
-from ..mechanics.body import Body
 from ..mechanics.material_data import Hardening
-from ..mechanics.materials import as_material
-from ..probes import ContactForce, ContactLength, MaxPlasticStrain, NodeDisplacement, Value
-from ..solver import NewtonSettings
+from ..names import LAWS, PLASTIC_UPDATES
 from .base import ContactScene, Scene, SceneError
+
+# What builds a scene (dolfinx, gmsh, UFL) is imported by the methods that build (`from .build
+# import ...`): creating and checking a scene's parameters stays light.
 
 
 def _check_strip(scene) -> None:
@@ -24,6 +19,7 @@ def _check_strip(scene) -> None:
 
 def _strip_mesh(scene, comm, need):
     """The L x h rectangle of the cantilever scenes, or the user's mesh with the ``need`` tags."""
+    from .build import geometry
     if scene.mesh:
         return scene.load_msh(comm, need)
     return geometry.rectangle(scene.L, scene.h, scene.size, order=scene.geometry_order, comm=comm)
@@ -60,6 +56,7 @@ class Elastica(Scene):
         return self.lam
 
     def build(self, md):
+        from .build import (Body, Fixed, NodeDisplacement, Traction)
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
         P = self.lam * self.E * self.h ** 3 / 12.0 / self.L ** 2      # lam = P L^2 / (E I)
         items = [Fixed("left"),
@@ -99,6 +96,7 @@ class Beam(ContactScene):
         return self.q_max
 
     def build(self, md):
+        from .build import (Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero)
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
         items = [Fixed("left"), Pressure("top", self.q_max)]
         contact = self.contact_item("bottom", Plane((0.0, -self.gap), (0.0, 1.0)))
@@ -144,6 +142,7 @@ class Plate(ContactScene):
         need = ("axis", "top", "bottom", "rim_support")
         if self.mesh:
             return self.load_msh(comm, need)
+        from .build import geometry
         return geometry.plate_section(self.R, self.t, self.z_support, self.size,
                                       order=self.geometry_order, comm=comm)
 
@@ -152,6 +151,7 @@ class Plate(ContactScene):
         return self.p_max
 
     def build(self, md):
+        from .build import (Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero)
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
         items = [Fixed("axis", component=0),           # u_r = 0 on the axis of symmetry
                  Fixed("rim_support", component=1),    # lower part of the rim: u_z = 0, free in r
@@ -233,18 +233,18 @@ class Ring(ContactScene):
             raise SceneError(f"R_out = {self.R_out}, wall = {self.wall}: need 0 < wall < R_out")
         if not self.delta_max > 0:
             raise SceneError(f"delta_max = {self.delta_max} must be > 0")
-        if self.law not in ("j2", "chen"):
-            raise SceneError(f"law = {self.law!r}: choose j2 or chen")
+        if self.law not in LAWS:
+            raise SceneError(f"law = {self.law!r}: choose {' or '.join(LAWS)}")
         if self.plane not in ("plane_strain", "plane_stress"):
             raise SceneError(f"plane = {self.plane!r}: choose plane_strain or plane_stress")
-        if self.update not in ("sr", "hughes_winget"):
+        if self.update not in PLASTIC_UPDATES:
             raise SceneError(f"update = {self.update!r} cannot carry plasticity: use sr or hughes_winget")
         self.table()
 
     def table(self) -> Hardening:
         return parse_table(self.hardening)
 
-    def newton_settings(self) -> NewtonSettings:
+    def newton_settings(self):
         # Travelling plastic hinges: the first corrections of an increment overshoot (points at the
         # hinges' borders switch between loading and unloading, free boundary points swing into
         # the plate); Crisfield's energy line search scales them back. Convergence: out-of-balance
@@ -252,12 +252,14 @@ class Ring(ContactScene):
         # 1e-6 (0.06 % at 40 increments; bench ring_tolerance), where 5e-3 puts up to 2.2 % into P.
         # gamma0 = 0.1 would take 3.9 iterations per increment instead of 4.4, but its penetration
         # (2.5e-3) delays the crown's lift-off from delta = 1.49 to 1.55 (bench ring_newton).
+        from .build import NewtonSettings
         return NewtonSettings(line_search="energy", energy_eta=0.2, scale="force", rtol=1e-3)
 
     def mesh_data(self, comm):
         need = ("xsym", "ysym", "outer")
         if self.mesh:
             return self.load_msh(comm, need)
+        from .build import geometry
         return geometry.annulus_sector(self.R_out - self.wall, self.R_out, self.size,
                                        order=self.geometry_order, comm=comm)
 
@@ -266,6 +268,8 @@ class Ring(ContactScene):
         return self.delta_max
 
     def build(self, md):
+        from .build import (Body, ContactForce, ContactLength, CrownGap, Fixed, MaxPlasticStrain,
+                            Plane, as_material, or_zero)
         material = as_material(self.E, self.nu, self.law, self.table())
         body = Body(md, self.plane, material, update=self.update, degree=self.degree)
         items = [Fixed("xsym", component=0), Fixed("ysym", component=1)]
@@ -279,29 +283,10 @@ class Ring(ContactScene):
 
     def fibres(self):
         def hoop(x):                   # along the deformed ring's circumference
+            import ufl
             r = ufl.sqrt(x[0] ** 2 + x[1] ** 2)
             return (-x[1] / r, x[0] / r)
         return [("hoop_stress", hoop)]
-
-
-class CrownGap(NodeDisplacement):
-    """Height of the upper plate above the ring's crown (> 0 once the crown lifts off)."""
-
-    def __init__(self, ring: Ring):
-        super().__init__("crown", (0.0, ring.R_out), component=1, column="crown_gap")
-        self.ring = ring
-
-    def __call__(self, model) -> dict:
-        r = self.ring
-        plate_y = r.R_out + r.gap - 0.5 * r.delta_max * model.load
-        return {"crown_gap": plate_y - (r.R_out + self.value(model.u)[1])}
-
-
-def or_zero(contact, *probes) -> list:
-    """The contact probes, or columns of zeros when the scene runs without contact."""
-    if contact is not None:
-        return list(probes)
-    return [Value(p.columns[0], lambda model: 0.0) for p in probes]
 
 
 def split_delta(load, crown_gap, contact_width) -> float | None:
