@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+from mpi4py import MPI
 from tqdm import tqdm
 
 from .mechanics.model import Model
@@ -102,6 +103,7 @@ class Results:
     timing_report: str = ""
     contact: dict = field(default_factory=dict)
     interrupted: bool = False       # by a signal or Ctrl-C (the exception goes on after the writers)
+    warnings: list = field(default_factory=list)
 
     def __getitem__(self, column: str) -> np.ndarray:
         if column not in self.columns:
@@ -131,6 +133,7 @@ class Run:
     job: "Job"
     model: Model
     columns: list[str]
+    warnings: list[str] = field(default_factory=list)     # the run's warnings so far, in order
 
     @property
     def comm(self):
@@ -196,6 +199,7 @@ class Job:
                             stats["max_penetration"] = max(stats["max_penetration"], z.max_penetration)
                             if z.in_contact and stats["first_contact_load"] is None:
                                 stats["first_contact_load"] = row["load"]
+                        self._guards(run, row, contacts, stats)
                         res.rows.append(row)
                         res.increments.append(inc)
                         for w in self.writers:
@@ -218,7 +222,31 @@ class Job:
             res.wall_s = time.perf_counter() - t_start
             res.timing, res.timing_report = dict(timer.totals), timer.report()
             res.contact = stats if contacts else {}
+            res.warnings = list(run.warnings)
             for w in self.writers:
                 collective(comm, w.close, run, res)
         return res
+
+    #: a penetration beyond this fraction of the smallest cell is warned about
+    PENETRATION_WARNING = 0.02
+
+    def _guards(self, run: Run, row: dict, contacts, stats) -> None:
+        """Warn (once each) of a plastic strain beyond the hardening table and of a penetration that
+        is a sizeable part of an element: results that are computed but should not be trusted."""
+        m, said = run.model, {w.split(":")[0] for w in run.warnings}
+        if m.plastic is not None and "plastic strain" not in said:
+            last = m.plastic.hardening.strain[-1]
+            p = m.comm.allreduce(float(m.p.x.array.max()) if m.p.x.array.size else 0.0, op=MPI.MAX)
+            if len(m.plastic.hardening.strain) > 1 and p > last:
+                run.warnings.append(
+                    f"plastic strain: {p:.3g} at increment {row['step']} (time {row['time']:.4g}) is beyond the "
+                    f"hardening table's last point ({last:.3g}), where the yield stress is extrapolated "
+                    f"(slope {m.plastic.hardening.tail_slope:.3g}): extend the table")
+        if contacts and "penetration" not in said:
+            h = m.comm.allreduce(min(float(c.h.x.array.min()) for c in contacts), op=MPI.MIN)
+            pen = stats["max_penetration"]
+            if pen > self.PENETRATION_WARNING * h:
+                run.warnings.append(
+                    f"penetration: {pen:.3g} at increment {row['step']} is {100 * pen / h:.0f} % of the smallest "
+                    "element: raise gamma0, use nitsche, or refine the mesh")
 

@@ -96,3 +96,25 @@ def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
     afile.write_text("x")
     bad = launch.run([*RUN, "elastica", "--out", afile, "--no-progress"])
     assert bad.returncode == 2 and "not a folder" in bad.stderr
+
+
+def test_guards_stop_folding_and_warn_of_untrustworthy_results(tmp_path):
+    """The ring crushed to delta = 10 folds elements at their nodes near the end (the quadrature
+    points alone let it pass before): the run cuts back, then stops with a message, and it has said
+    that the plastic strain left the hardening table (last point 0.5). A mesh of one element across
+    the wall lets the plate sink into it by a few percent of the element: warned."""
+    out = tmp_path / "fold"
+    p = launch.run([*RUN, "ring", "--out", out, "--no-progress", "--set", "delta_max=10"])
+    assert p.returncode == 1, p.stdout + p.stderr
+    assert "element folds" in p.stderr and "Traceback" not in p.stderr
+    info = json.loads((out / "run.json").read_text())
+    assert info["status"] == "stopped" and "element folds" in info["message"]
+    rows = _rows(out / "history.csv")
+    assert 0.9 < float(rows[-1]["time"]) < 1.0
+    assert [w for w in info["warnings"] if w.startswith("plastic strain")]
+    assert "warning: plastic strain" in p.stdout
+    coarse = launch.run([*RUN, "ring", "--out", tmp_path / "coarse", "--no-progress", "--set", "size=100"])
+    assert coarse.returncode == 0
+    assert "warning: penetration" in coarse.stdout
+    fine = launch.run([*RUN, "ring", "--out", tmp_path / "fine", "--no-progress"])
+    assert "warning" not in fine.stdout                         # the scene at its defaults: nothing to say

@@ -92,7 +92,8 @@ class RunInfo(Writer):
 
     def _info(self, run, status: str, message: str, results=None) -> str:
         info = {"parameters": self.parameters, "status": status, "completed": status == "completed",
-                "message": message, "increments": self.rows, "ranks": run.comm.size}
+                "message": message, "increments": self.rows, "ranks": run.comm.size,
+                "warnings": list(run.warnings)}
         if results is not None:
             info.update(increments=len(results.increments), newton_its=results.newton_its,
                         failed_its=results.failed_its, dofs=results.dofs, wall_s=results.wall_s,
@@ -130,6 +131,9 @@ class Console(Writer):
                          f"update {m.body.update}, {sum(s.n for s in run.job.steps)} increments nominal")
 
     def write(self, run, row, inc) -> None:
+        for w in run.warnings[getattr(self, "_said", 0):]:
+            self._print(run, f"warning: {w}")
+        self._said = len(run.warnings)
         extra = ", ".join(f"{k} {row[k]:.5g}" for k in self.columns)
         cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
         self._print(run, f"  step {row['step']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "

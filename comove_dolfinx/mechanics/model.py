@@ -214,6 +214,20 @@ class Model:
         return (np.concatenate([d for d, _ in parts]).astype(np.int32),
                 -np.concatenate([f for _, f in parts]))
 
+    def folded_at_nodes(self) -> str | None:
+        """Why the current iterate is inadmissible at the nodes, or None: the element map folds
+        where det F <= 0 at a node of a cell (its vertices and, for P2, edge midpoints), which the
+        quadrature points alone can miss. One evaluation per converged increment."""
+        if getattr(self, "_nodal_det", None) is None:
+            pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
+                           ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if self.degree == 2 else []))
+            self._nodal_det = compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(self.u)), pts)
+        vals = compat.evaluate(self._nodal_det, self.mesh, self.rule.cells)
+        worst = self.comm.allreduce(float(vals.min()) if vals.size else np.inf, op=MPI.MIN)
+        if worst > 0.0:
+            return None
+        return f"det F = {worst:.3g} <= 0 at a node: an element folds (increment too large, or the body folds)"
+
     def evaluate_stress(self) -> None:
         """Stress (and tangent) at every quadrature point for the current displacement iterate.
 

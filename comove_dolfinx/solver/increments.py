@@ -173,6 +173,10 @@ class IncrementalSolver:
                 ok, more, reason = self.newton.solve()     # true Coulomb: re-lag the pressure
                 its += more
                 passes += 1
+            if ok:
+                folded = m.folded_at_nodes()
+                if folded is not None:
+                    ok, reason = False, folded
             if not ok:
                 m.restore()
                 if from_start:
