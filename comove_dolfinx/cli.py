@@ -35,7 +35,8 @@ def _verbose(comm) -> None:
     logging.getLogger().setLevel(logging.WARNING)
 
 
-def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, overwrite: bool = False):
+def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, overwrite: bool = False,
+              restart: bool = False, checkpoint_every: int = 1):
     """Run a preset ``scene`` into the folder ``out_dir`` (history.csv, results.pvd with one .vtu per
     increment, run.json, the console's lines); returns the :class:`Results`. ``newton``: settings
     instead of the scene's; ``overwrite``: replace the results of an earlier run there."""
@@ -45,24 +46,26 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
     from mpi4py import MPI
 
     from .io import VTK, Console, HistoryCSV, RunInfo
+    from .io.checkpoint import Checkpoint
     from .io.folder import RunFolder
 
     comm = comm or MPI.COMM_WORLD
     out = pathlib.Path(out_dir)
-    with RunFolder(out, overwrite, comm):
+    with RunFolder(out, overwrite, comm, restart):
         md = scene.mesh_data(comm)
         writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
                    RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
-                   Console(scene.name, scene.columns)]
+                   Console(scene.name, scene.columns), Checkpoint(out / "checkpoint", checkpoint_every)]
         job = scene.job(md, writers)
         if newton is not None:
             job.newton = newton
-        return job.run(progress=progress)
+        return job.run(progress=progress, restart=out / "checkpoint" if restart else None)
 
 
 def _errors():
     from .contact import ContactError
     from .geometry import MeshError
+    from .io.checkpoint import CheckpointError
     from .io.folder import FolderError
     from .job import JobError
     from .loads import ItemError
@@ -71,10 +74,11 @@ def _errors():
     from .presets import SceneError
     from .probes import ProbeError
     return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError,
-            FolderError)
+            FolderError, CheckpointError)
 
 
-def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: bool = False):
+def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: bool = False,
+                restart: bool = False, checkpoint_every: int = 1):
     """Run a problem file (problem.py) into ``out_dir``, with the writers of the scenes."""
     import pathlib
 
@@ -82,15 +86,18 @@ def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: boo
 
     from . import problem
     from .io import VTK, Console, HistoryCSV, RunInfo
+    from .io.checkpoint import Checkpoint
     from .io.folder import RunFolder
 
     comm = comm or MPI.COMM_WORLD
     data = problem.read(path)
     out = pathlib.Path(out_dir)
-    with RunFolder(out, overwrite, comm):
+    with RunFolder(out, overwrite, comm, restart):
         writers = [HistoryCSV(out / "history.csv"), VTK(out),
-                   RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem)]
-        return problem.build(data, comm, writers).run(progress=progress)
+                   RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem),
+                   Checkpoint(out / "checkpoint", checkpoint_every)]
+        return problem.build(data, comm, writers).run(progress=progress,
+                                                      restart=out / "checkpoint" if restart else None)
 
 
 def _on_sigterm(signum, frame):
@@ -125,9 +132,11 @@ def _run(args) -> int:
     signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         if problem:
-            result = run_problem(args.scene, args.out, progress=not args.no_progress, overwrite=args.overwrite)
+            result = run_problem(args.scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
+                                 restart=args.restart, checkpoint_every=args.checkpoint_every)
         else:
-            result = run_scene(scene, args.out, progress=not args.no_progress, overwrite=args.overwrite)
+            result = run_scene(scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
+                               restart=args.restart, checkpoint_every=args.checkpoint_every)
     except errors as err:
         return fail(err)
     except KeyboardInterrupt as err:
@@ -155,6 +164,10 @@ def main(argv=None) -> int:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument("--overwrite", action="store_true",
                      help="replace the results of an earlier run in the --out folder")
+    run.add_argument("--restart", action="store_true",
+                     help="go on from the last checkpoint in the --out folder (same scene, same ranks)")
+    run.add_argument("--checkpoint-every", type=int, default=1, metavar="K",
+                     help="save the state every K converged increments (default 1)")
     sub.add_parser("scenes", help="list the scenes and their parameters with defaults")
     args = parser.parse_args(argv)
     if args.command == "run":
@@ -186,6 +199,10 @@ def _check_early(args):
     from .problem import ProblemError, read
     if not args.out.strip():
         return "--out '': give the output folder"
+    if args.checkpoint_every < 1:
+        return f"--checkpoint-every {args.checkpoint_every}: give a whole number >= 1"
+    if args.restart and args.overwrite:
+        return "--restart and --overwrite: choose one (go on from the checkpoint, or start afresh)"
     try:
         if args.scene.endswith(".toml"):
             read(args.scene)

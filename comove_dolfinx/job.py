@@ -30,6 +30,7 @@ from .mechanics.model import Model
 from .names import PREDICTORS
 from .parallel import collective
 from .solver import (
+    Increment,
     IncrementalSolver,
     Newton,
     NewtonSettings,
@@ -134,6 +135,12 @@ class Run:
     model: Model
     columns: list[str]
     warnings: list[str] = field(default_factory=list)     # the run's warnings so far, in order
+    resumed_rows: list = field(default_factory=list)      # rows of the run restarted from
+    job_rows: list = field(default_factory=list)          # every row so far (resumed ones first)
+    solver: object = None                                 # the increment loop of the current step
+    newton: object = None
+    step_index: int = 0
+    contact_stats: dict = field(default_factory=dict)    # first contact, largest penetration
 
     @property
     def comm(self):
@@ -158,8 +165,9 @@ class Job:
             raise JobError(f"the history would have the column(s) {dup} twice: rename a probe")
         self.columns = columns + ["newton_its", "wall_s"]
 
-    def run(self, progress: bool = False) -> Results:
-        """Compile, run every step, write; returns the :class:`Results` (also when a step fails)."""
+    def run(self, progress: bool = False, restart=None) -> Results:
+        """Compile, run every step, write; returns the :class:`Results` (also when a step fails).
+        ``restart``: a checkpoint folder (io.Checkpoint) to go on from, with the same ranks."""
         t_start = time.perf_counter()
         timer = Timer()
         with timer("setup and compilation"):
@@ -174,19 +182,41 @@ class Job:
             p.attach(model)
         run = Run(self, model, self.columns)
         res = Results(list(self.columns), dofs=model.num_dofs())
+        saved = None
+        if restart is not None:
+            from .io import checkpoint
+            saved = checkpoint.load(restart, comm)
+            run.resumed_rows = [dict(r) for r in saved[0]["rows"]]
+            res.rows = [dict(r) for r in run.resumed_rows]
+            res.increments = [Increment(int(r["step"]), float(r["time"]), int(r["newton_its"]), float(r["wall_s"]))
+                              for r in res.rows]
+        run.job_rows = res.rows
         stats = {"first_contact_load": None, "max_penetration": 0.0}
+        if saved is not None:
+            stats.update(saved[0].get("contact", {}))
+            run.warnings = list(saved[0].get("warnings", []))
+        run.contact_stats = stats
         with timer("output"):
             for w in self.writers:
                 collective(comm, w.open, run)
         newton = Newton(model, self.newton, timer)
+        run.newton = newton
         bar = tqdm(total=len(self.steps), unit="step", disable=not progress or comm.rank != 0,
                    bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
         try:
             for k, step in enumerate(self.steps):
+                if saved is not None and k < saved[0]["step_index"]:
+                    continue                               # done before the checkpoint
                 step.start(self.items)
                 solver = IncrementalSolver(model, step.settings(), newton)
+                run.solver, run.step_index = solver, k
+                resume = None
+                if saved is not None:
+                    from .io import checkpoint
+                    resume = checkpoint.restore(*saved, model, newton)
+                    saved = None
                 rr, last = RunResult(), 0.0
-                for inc in solver.increments(rr):
+                for inc in solver.increments(rr, resume):
                     t = k + inc.load
                     row = {"step": len(res.rows) + 1, "time": t,
                            "load": self.load(t) if self.load is not None else t}

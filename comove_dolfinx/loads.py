@@ -88,6 +88,19 @@ class Item:
     def restore(self) -> None:
         pass
 
+    # -- checkpoints: what the item holds at a converged increment, before it commits -------------
+    def save_state(self) -> dict:
+        return {"factor": self.factor, "start": self._start}
+
+    def load_state(self, state: dict) -> None:
+        """Back to a saved state; the step's ramp must have been set (``ramp``/``hold``) first."""
+        self._start = float(state["start"])
+        self.set_factor(float(state["factor"]))
+
+    def set_factor(self, factor: float) -> None:
+        self.factor = factor
+        self._apply(factor)
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name or ''})"
 

@@ -163,6 +163,22 @@ class Contact(Item):
         self.u_lag.x.array[:] = self._u_n.x.array
         self._d_lag.value = self._d_n.value
 
+    def save_state(self) -> dict:
+        out = super().save_state()
+        out.update(factor_n=self.factor_n, d_n=np.array(self._d_n.value), d_lag=np.array(self._d_lag.value),
+                   u_lag=self.u_lag.x.array.copy())
+        if self.mu > 0 and self.method == "penalty":
+            out["e_n"] = self.e_n.x.array.copy()
+        return out
+
+    def load_state(self, state: dict) -> None:
+        super().load_state(state)
+        self.factor_n = float(state["factor_n"])
+        self._d_n.value, self._d_lag.value = state["d_n"], state["d_lag"]
+        self.u_lag.x.array[:] = state["u_lag"]
+        if "e_n" in state:
+            self.e_n.x.array[:] = state["e_n"]
+
     def relag_pass(self) -> bool:
         """True Coulomb: take the threshold from the current solution; True if it changed notably."""
         if not (self.relag and self.mu > 0):

@@ -38,9 +38,9 @@ def _alive(pid: int) -> bool:
 
 
 class RunFolder:
-    def __init__(self, path, overwrite: bool = False, comm=None):
+    def __init__(self, path, overwrite: bool = False, comm=None, restart: bool = False):
         from mpi4py import MPI
-        self.path, self.overwrite = pathlib.Path(path), overwrite
+        self.path, self.overwrite, self.restart = pathlib.Path(path), overwrite, restart
         self.comm = comm or MPI.COMM_WORLD
         self.lock = self.path / ".lock"
 
@@ -66,7 +66,11 @@ class RunFolder:
             self.lock.unlink(missing_ok=True)              # left by a run that was killed
         old = [f for f in RESULTS if (p / f).exists()] + [
             g.name for pat in RESULT_GLOBS for g in p.glob(pat)]
-        if old and not self.overwrite:
+        if self.restart:
+            if not (p / "checkpoint" / "meta.json").exists():
+                raise FolderError(f"--out {p}: no checkpoint to restart from: run without --restart")
+            old = []                                     # the run goes on where it stopped
+        elif old and not self.overwrite:
             raise FolderError(f"--out {p}: holds the results of an earlier run ({', '.join(sorted(old)[:3])}"
                               f"{', ...' if len(old) > 3 else ''}): pass --overwrite to replace them, or "
                               "choose another folder")

@@ -77,6 +77,11 @@ class VTK(Writer):
         self.fibres = [FibreStress(m, name, A) for name, A in self.fibre_specs]
         self.contacts = [item for item in m.items if item.kind == "contact"]
         on_root(self.comm, self.folder.mkdir, parents=True, exist_ok=True)
+        if run.resumed_rows:             # a restarted run: the datasets up to its checkpoint
+            import xml.etree.ElementTree as ET
+            pvd = self.folder / f"{self.name}.pvd"
+            sets = [(float(d.get("timestep")), d.get("file")) for d in ET.parse(pvd).getroot().iter("DataSet")]
+            self.steps = sets[:len(run.resumed_rows)]
 
     # -- each increment -------------------------------------------------------------------------
     def _gather_points(self, values: np.ndarray) -> np.ndarray | None:

@@ -39,10 +39,12 @@ class HistoryCSV(Writer):
         self.path = pathlib.Path(path)
         self._fh = None
 
-    def _open(self, columns) -> None:
+    def _open(self, columns, rows=()) -> None:
         self._fh = open(self.path, "w", newline="")
         self._csv = csv.writer(self._fh)
         self._csv.writerow(columns)
+        for r in rows:                       # a restarted run: the rows up to its checkpoint
+            self._csv.writerow([_fmt(r[c]) for c in columns])
         self._fh.flush()
 
     def _write(self, values) -> None:
@@ -51,7 +53,7 @@ class HistoryCSV(Writer):
 
     def open(self, run) -> None:
         self.columns = run.columns
-        on_root(run.comm, self._open, self.columns)
+        on_root(run.comm, self._open, self.columns, run.resumed_rows)
 
     def write(self, run, row, increment) -> None:
         on_root(run.comm, self._write, [row[c] for c in self.columns])
@@ -101,6 +103,7 @@ class RunInfo(Writer):
         return json.dumps(info, indent=1, default=str)
 
     def open(self, run) -> None:
+        self.rows = len(run.resumed_rows)
         on_root(run.comm, write_atomic, self.path, self._info(run, "running", "the run is going on"))
 
     def write(self, run, row, increment) -> None:

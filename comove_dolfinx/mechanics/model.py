@@ -250,6 +250,37 @@ class Model:
         self.u_n.x.array[:] = self.u.x.array
         self.state.commit()
 
+    # state arrays of a converged increment, before it commits (checkpoints)
+    _SAVED = ("sigma", "p", "F22")
+
+    def save_state(self) -> dict:
+        """Everything a converged increment holds before it commits, to go on from it (arrays of
+        this rank, ghosts included, so a restart needs the same number of ranks)."""
+        st = self.state
+        out = {"u": self.u.x.array.copy(), "u_n": self.u_n.x.array.copy(), "load": self.load}
+        for name in self._SAVED:
+            f = getattr(st, name)
+            if f is not None:
+                out[name] = f.x.array.copy()
+        if st.state_new is not None:
+            out["state_new"] = st.state_new.copy()
+        return out
+
+    def load_state(self, state: dict, items: list[dict]) -> None:
+        """Back to a saved converged increment, then commit it: the model is where the run was
+        when it saved, and goes on as it did."""
+        st = self.state
+        self.u.x.array[:], self.u_n.x.array[:] = state["u"], state["u_n"]
+        for name in self._SAVED:
+            if name in state:
+                getattr(st, name).x.array[:] = state[name]
+        if "state_new" in state:
+            st.state_new[:] = state["state_new"]
+        self.load = float(state["load"])
+        for item, saved in zip(self.items, items):
+            item.load_state(saved)
+        self.commit()
+
     def restore(self) -> None:
         """Return to the last converged state (after a failed increment)."""
         self.u.x.array[:] = self.u_n.x.array

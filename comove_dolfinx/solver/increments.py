@@ -137,9 +137,13 @@ class IncrementalSolver:
             last = inc.load
         return result
 
-    def increments(self, result: RunResult | None = None):
+    def increments(self, result: RunResult | None = None, resume: dict | None = None):
         """Yield every converged increment while the model still holds its state (not yet
-        committed); ``result`` (a RunResult) gathers the increments and says how the loop ended."""
+        committed); ``result`` (a RunResult) gathers the increments and says how the loop ended.
+        ``self.resume_state`` then holds what the loop goes on from (load factor, increment size,
+        counters, the predictor's past states): a checkpoint saves it, and ``resume`` (that dict,
+        with the model, its items and the last tangent restored and committed) continues the loop
+        where it stood, so that a restarted run repeats the uninterrupted one."""
         result = RunResult() if result is None else result
         m, st = self.model, self.steps
         dt_nom = st.t_end / st.n_steps
@@ -157,6 +161,13 @@ class IncrementalSolver:
             # (e.g. the elastic unloading when an obstacle starts to withdraw)
             have_rate = self.newton.load_rate(0.0, rate, 1e-6 * st.t_end)
         from_start = have_rate          # no chord to check it against: dropped if it fails
+        if resume is not None:
+            t, dt, step, easy = resume["t"], resume["dt"], resume["step"], resume["easy"]
+            past = [(float(a), np.array(b)) for a, b in resume["past"]] or past
+            from_start = have_rate = False
+            if tangent and self.newton.factorised:
+                have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
+                             and self._agrees_with_chord(rate, past))
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
         while t < st.t_end - tol:
@@ -197,18 +208,22 @@ class IncrementalSolver:
             inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its)
             result.increments.append(inc)
             cut, failed_its = 0, 0
+            # where the loop goes on from (computed before the consumer sees the increment)
+            past_next = past[-order:] + [(t, m.u.x.array.copy())] if order else past
+            easy_next, dt_next = easy + 1 if its <= st.easy_its else 0, dt
+            # grow back towards the nominal increment, staying on the grid of the doubled step
+            if easy_next >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
+                dt_next, easy_next = min(2 * dt, dt_nom), 0
+            self.resume_state = {"t": t, "dt": dt_next, "step": step, "easy": easy_next,
+                                 "past": past_next}
             yield inc
             m.commit()
-            past = past[-order:] + [(t, m.u_n.x.array.copy())] if order else past
+            past = past_next
             if tangent:
                 from_start = False
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
                              and self._agrees_with_chord(rate, past))
             t_mark = time.perf_counter()
-            easy = easy + 1 if its <= st.easy_its else 0
-            # grow back towards the nominal increment, staying on the grid of the doubled step
-            if easy >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
-                dt = min(2 * dt, dt_nom)
-                easy = 0
+            easy, dt = easy_next, dt_next
         result.completed = True
         result.message = f"completed {step} increments"
