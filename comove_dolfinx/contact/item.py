@@ -166,9 +166,9 @@ class Contact(Item):
     def save_state(self) -> dict:
         out = super().save_state()
         out.update(factor_n=self.factor_n, d_n=np.array(self._d_n.value), d_lag=np.array(self._d_lag.value),
-                   u_lag=self.u_lag.x.array.copy())
+                   u_lag=("V", self.u_lag.x.array))
         if self.mu > 0 and self.method == "penalty":
-            out["e_n"] = self.e_n.x.array.copy()
+            out["e_n"] = (self.e_n.function_space, self.e_n.x.array)
         return out
 
     def load_state(self, state: dict) -> None:

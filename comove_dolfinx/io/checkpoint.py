@@ -1,13 +1,15 @@
 """Checkpoints: the full state of a converged increment, to restart a run from it.
 
 The :class:`Checkpoint` writer saves, every ``every`` converged increments, into ``folder``:
-``state_NNNNN_rankR.npz`` (each rank's displacement, quadrature state, items' state - friction
-history, obstacle positions, load factors - and the predictor's past states), ``tangent_NNNNN.petsc``
-(the last factorised tangent, which the tangent predictor reuses) and ``meta.json`` (the step, the
-increment loop's counters, Newton's residual scale and the history rows so far), written last and
-renamed into place: it names the files of the newest complete checkpoint, whose files are never
-removed before it. ``Job.run(restart=folder)`` (``comove run ... --restart``) goes on from it with the
-same number of ranks and gives the history of the uninterrupted run.
+``state_NNNNN_rankR.npz`` (each rank's displacement, quadrature state, the items' state - friction
+history, obstacle positions, load factors -, the predictor's past states, and the iterate whose
+tangent Newton factorised last, rebuilt at a restart for the tangent predictor) and ``meta.json``
+(the step, the increment loop's counters, Newton's residual scale, the history rows so far), written
+last and renamed into place: it names the files of the newest complete checkpoint, which are never
+removed before it. Values are stored with the positions of their nodes and quadrature points, so
+nothing depends on how the mesh was partitioned (which changes from run to run on several ranks).
+``Job.run(restart=folder)`` (``comove run ... --restart``) goes on from it, on any number of ranks,
+and gives the history of the uninterrupted run.
 """
 from __future__ import annotations
 
@@ -16,7 +18,6 @@ import os
 import pathlib
 
 import numpy as np
-from petsc4py import PETSc
 
 from ..parallel import on_root
 from .writers import Writer, write_atomic
@@ -24,6 +25,31 @@ from .writers import Writer, write_atomic
 
 class CheckpointError(ValueError):
     """A checkpoint that cannot be used; the message names it and the fix."""
+
+
+def _owned(model, kind, arr):
+    """(key coordinates, values) of this rank's owned entries of a saved array."""
+    if isinstance(kind, str) and kind == "V":
+        n = model.V.dofmap.index_map.size_local
+        return model.V.tabulate_dof_coordinates()[:n, :2], np.asarray(arr).reshape(-1, 2)[:n]
+    if isinstance(kind, str) and kind == "Q":
+        tdim = model.mesh.topology.dim
+        n = model.mesh.topology.index_map(tdim).size_local * model.rule.points.shape[0]
+        return model.point_coordinates()[:n], np.asarray(arr)[:n]
+    n = kind.dofmap.index_map.size_local                        # a scalar space of an item
+    return kind.tabulate_dof_coordinates()[:n, :2], np.asarray(arr)[:n]
+
+
+def _local_coordinates(model, kind):
+    if isinstance(kind, str) and kind == "V":
+        return model.V.tabulate_dof_coordinates()[:, :2]
+    if isinstance(kind, str) and kind == "Q":
+        return model.point_coordinates()
+    return kind.tabulate_dof_coordinates()[:, :2]
+
+
+def _key(X: np.ndarray):
+    return [tuple(k) for k in np.round(X, 9)]
 
 
 class Checkpoint(Writer):
@@ -43,70 +69,100 @@ class Checkpoint(Writer):
             return
         comm, n = run.comm, row["step"]
         m, solver, newton = run.model, run.solver, run.newton
-        arrays = {f"model_{k}": v for k, v in m.save_state().items()}
+        arrays, kinds = {}, {}
+
+        def put(name, value):
+            if isinstance(value, tuple):              # (kind, local array): owned entries, keyed by position
+                kind, arr = value
+                X, vals = _owned(m, kind, arr)
+                tag = kind if isinstance(kind, str) else "S"
+                arrays[f"X{tag}"], arrays[name], kinds[name] = X, vals, tag
+            else:
+                arrays[name] = np.asarray(value)
+
+        for k, v in m.save_state().items():
+            put(f"model_{k}", v)
         for i, item in enumerate(m.items):
-            arrays.update({f"item{i}_{k}": np.asarray(v) for k, v in item.save_state().items()})
+            for k, v in item.save_state().items():
+                put(f"item{i}_{k}", v)
         rs = solver.resume_state
         for j, (_, u) in enumerate(rs["past"]):
-            arrays[f"past{j}"] = u
+            put(f"past{j}", ("V", u))
+        if newton.factorised:
+            put("u_factorised", ("V", newton.u_factorised))
         name = self.folder / f"state_{n:05d}_rank{comm.rank}.npz"
         tmp = name.with_name(f".{name.stem}.tmp.npz")
         np.savez(tmp, **arrays)
         os.replace(tmp, name)
-        tangent = self.folder / f"tangent_{n:05d}.petsc"
-        if newton.factorised:
-            viewer = PETSc.Viewer().createBinary(str(tangent), "w", comm=comm)
-            newton.A.view(viewer)
-            viewer.destroy()
         comm.barrier()
         meta = {"increment": n, "ranks": comm.size, "step_index": run.step_index,
                 "resume": {"t": rs["t"], "dt": rs["dt"], "step": rs["step"], "easy": rs["easy"],
                            "past_t": [t for t, _ in rs["past"]]},
                 "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
-                "rows": run.job_rows, "contact": run.contact_stats, "warnings": run.warnings}
+                "rows": run.job_rows, "contact": run.contact_stats, "warnings": run.warnings, "kinds": kinds}
         on_root(comm, self._commit, n, json.dumps(meta, default=float))
 
     def _commit(self, n: int, text: str) -> None:
         write_atomic(self.folder / "meta.json", text)
         for f in self.folder.iterdir():                # older checkpoints, now superseded
-            if f.name.startswith(("state_", "tangent_")) and f"_{n:05d}" not in f.name:
+            if f.name.startswith("state_") and f"_{n:05d}" not in f.name:
                 f.unlink(missing_ok=True)
 
 
-def load(folder, comm) -> tuple[dict, dict]:
-    """(meta, this rank's arrays) of the newest checkpoint in ``folder``."""
+def load(folder, comm) -> tuple[dict, list]:
+    """(meta, every rank's saved arrays) of the newest checkpoint in ``folder``; any number of
+    ranks' files are read, and matched to this run's numbering by position in ``restore``."""
     folder = pathlib.Path(folder)
     try:
         meta = json.loads((folder / "meta.json").read_text())
     except (OSError, ValueError):
         raise CheckpointError(f"{folder}: no checkpoint to restart from (meta.json missing or unreadable): "
                               "run without --restart") from None
-    if meta["ranks"] != comm.size:
-        raise CheckpointError(f"{folder}: the checkpoint was written by {meta['ranks']} ranks, this run has "
-                              f"{comm.size}: restart with mpirun -n {meta['ranks']}")
     n = meta["increment"]
-    with np.load(folder / f"state_{n:05d}_rank{comm.rank}.npz") as f:
-        arrays = {k: f[k] for k in f.files}
-    meta["tangent"] = str(folder / f"tangent_{n:05d}.petsc")
-    return meta, arrays
+    parts = []
+    for r in range(meta["ranks"]):
+        with np.load(folder / f"state_{n:05d}_rank{r}.npz") as f:
+            parts.append({k: f[k] for k in f.files})
+    return meta, parts
 
 
-def restore(meta: dict, arrays: dict, model, newton) -> dict:
-    """Put the model, its items and Newton back at the checkpoint; the loop's resume dict."""
-    mstate = {k[6:]: v for k, v in arrays.items() if k.startswith("model_")}
+def restore(meta: dict, parts: list, model, newton) -> dict:
+    """Put the model, its items and Newton back at the checkpoint (whatever the partition of the
+    run that wrote it); the increment loop's resume dict."""
+    kinds = meta["kinds"]
+    spaces = {"V": "V", "Q": "Q"}
+    for i, item in enumerate(model.items):          # the scalar spaces of the items' fields
+        for k, v in item.save_state().items():
+            if isinstance(v, tuple) and not isinstance(v[0], str):
+                spaces["S"] = v[0]
+    index = {}
+
+    def local(name):
+        tag = kinds.get(name)
+        if tag is None:
+            return parts[0][name]
+        if tag not in index:
+            X = np.concatenate([p[f"X{tag}"] for p in parts])
+            where = dict(zip(_key(X), range(len(X))))
+            try:
+                index[tag] = np.array([where[k] for k in _key(_local_coordinates(model, spaces[tag]))])
+            except KeyError:
+                raise CheckpointError("the checkpoint does not fit this mesh: restart the same problem") from None
+        vals = np.concatenate([p[name] for p in parts])[index[tag]]
+        return vals.ravel() if tag in ("V", "S") else vals
+
+    names = parts[0].keys()
+    mstate = {k[6:]: local(k) for k in names if k.startswith("model_")}
     items = []
     for i, _ in enumerate(model.items):
         p = f"item{i}_"
-        items.append({k[len(p):]: v for k, v in arrays.items() if k.startswith(p)})
-    model.load_state(mstate, items)
+        items.append({k[len(p):]: local(k) for k in names if k.startswith(p)})
     newton.residual_scale = meta["residual_scale"]
-    if meta["factorised"]:
-        viewer = PETSc.Viewer().createBinary(meta["tangent"], "r", comm=model.comm)
-        newton.A.zeroEntries()
-        newton.A.load(viewer)
-        viewer.destroy()
+    u_fact = local("u_factorised") if meta["factorised"] else None
+    model.load_state(mstate, items, u_fact, newton.A)
+    if u_fact is not None:
         newton.ksp.setOperators(newton.A)
         newton.factorised = True
     r = dict(meta["resume"])
-    r["past"] = [(t, arrays[f"past{j}"]) for j, t in enumerate(r.pop("past_t"))]
+    r["past"] = [(t, local(f"past{j}")) for j, t in enumerate(r.pop("past_t"))]
     return r

@@ -250,35 +250,51 @@ class Model:
         self.u_n.x.array[:] = self.u.x.array
         self.state.commit()
 
-    # state arrays of a converged increment, before it commits (checkpoints)
-    _SAVED = ("sigma", "p", "F22")
-
+    # -- checkpoints ----------------------------------------------------------------------------
     def save_state(self) -> dict:
-        """Everything a converged increment holds before it commits, to go on from it (arrays of
-        this rank, ghosts included, so a restart needs the same number of ranks)."""
+        """A converged increment before it commits, to go on from it: name -> (kind, local array),
+        kind "V" (the displacement's nodes) or "Q" (quadrature points), or a number. The old
+        converged state (``_n``) is there too: with the iterate Newton factorised last it rebuilds
+        the tangent that the predictor reuses."""
         st = self.state
-        out = {"u": self.u.x.array.copy(), "u_n": self.u_n.x.array.copy(), "load": self.load}
-        for name in self._SAVED:
+        out = {"u": ("V", self.u.x.array), "u_n": ("V", self.u_n.x.array), "load": self.load}
+        for name in ("sigma", "sigma_n", "p", "p_n", "F22", "F22_n"):
             f = getattr(st, name)
             if f is not None:
-                out[name] = f.x.array.copy()
+                out[name] = ("Q", self.rule.view(f))
         if st.state_new is not None:
-            out["state_new"] = st.state_new.copy()
+            out["state_new"] = ("Q", st.state_new)
         return out
 
-    def load_state(self, state: dict, items: list[dict]) -> None:
-        """Back to a saved converged increment, then commit it: the model is where the run was
-        when it saved, and goes on as it did."""
+    def point_coordinates(self) -> np.ndarray:
+        """Reference coordinates (points, 2) of this rank's quadrature points (ghost cells too)."""
+        if getattr(self, "_xq", None) is None:
+            self._xq = self.rule.evaluate(self.rule.expression(self.x))
+        return self._xq
+
+    def load_state(self, state: dict, items: list[dict], u_factorised=None, matrix=None) -> None:
+        """Back to a saved converged increment (arrays already on this rank's numbering), then
+        commit it. With ``u_factorised`` and ``matrix``, the tangent of that iterate is assembled
+        first (against the old converged state, as Newton assembled it) into ``matrix``."""
         st = self.state
-        self.u.x.array[:], self.u_n.x.array[:] = state["u"], state["u_n"]
-        for name in self._SAVED:
+        self.u_n.x.array[:] = state["u_n"]
+        for name in ("sigma_n", "p_n", "F22_n"):
             if name in state:
-                getattr(st, name).x.array[:] = state[name]
-        if "state_new" in state:
-            st.state_new[:] = state["state_new"]
+                getattr(st, name).x.array[:] = np.asarray(state[name]).ravel()
+        st.refit()
         self.load = float(state["load"])
         for item, saved in zip(self.items, items):
             item.load_state(saved)
+        if u_factorised is not None:
+            self.u.x.array[:] = u_factorised
+            self.evaluate_stress()
+            compat.assemble_matrix(matrix, self.jacobian_form, self.bcs)
+        self.u.x.array[:] = state["u"]
+        for name in ("sigma", "p", "F22"):
+            if name in state:
+                getattr(st, name).x.array[:] = np.asarray(state[name]).ravel()
+        if "state_new" in state:
+            st.state_new[:] = state["state_new"]
         self.commit()
 
     def restore(self) -> None:

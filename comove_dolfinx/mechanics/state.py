@@ -95,6 +95,15 @@ class QuadratureState:
             if self.F22_n is not None:
                 self._fit("F22_n", self.F22_n.x.array)
 
+    def refit(self) -> None:
+        """Refresh the facet fits from the converged state (after it was set from outside)."""
+        view = self.rule.view
+        self._fit("sigma_n", view(self.sigma_n))
+        if self.plastic is not None:
+            self._fit("p_n", self.p_n.x.array)
+            if self.F22_n is not None:
+                self._fit("F22_n", self.F22_n.x.array)
+
     # -- copies on the facets --------------------------------------------------------------------
     def facet(self, name: str):
         """DG function holding a cell-wise fit of the converged state ``name`` (created on first use,

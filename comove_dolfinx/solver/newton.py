@@ -164,6 +164,7 @@ class Newton(LineSearches):
                 return True, it - 1, "converged"
             with self.timer("assembly"):
                 compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
+            self.u_factorised = m.u.x.array.copy()        # a checkpoint rebuilds this tangent
             with self.timer("solve"):
                 failure = self._solve_linear()
             if failure is not None:
