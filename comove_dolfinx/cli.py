@@ -55,7 +55,8 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
         md = scene.mesh_data(comm)
         writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
                    RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
-                   Console(scene.name, scene.columns), Checkpoint(out / "checkpoint", checkpoint_every)]
+                   Console(scene.name, scene.columns), Checkpoint(out / "checkpoint", checkpoint_every),
+                   _signal_writer()]
         job = scene.job(md, writers)
         if newton is not None:
             job.newton = newton
@@ -95,13 +96,35 @@ def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: boo
     with RunFolder(out, overwrite, comm, restart):
         writers = [HistoryCSV(out / "history.csv"), VTK(out),
                    RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem),
-                   Checkpoint(out / "checkpoint", checkpoint_every)]
+                   Checkpoint(out / "checkpoint", checkpoint_every), _signal_writer()]
         return problem.build(data, comm, writers).run(progress=progress,
                                                       restart=out / "checkpoint" if restart else None)
 
 
 def _on_sigterm(signum, frame):
     raise KeyboardInterrupt("SIGTERM")
+
+
+def _on_sigint(signum, frame):
+    raise KeyboardInterrupt()
+
+
+def _signal_writer():
+    """A writer that (re)installs the command's SIGTERM and Ctrl-C handlers at every increment:
+    some MPI and PETSc builds reset Ctrl-C to the default (the process dies without a word) when
+    their solvers start."""
+    import signal
+
+    from .io import Writer
+
+    class Signals(Writer):
+        def open(self, run):
+            self.write(run, None, None)
+
+        def write(self, run, row, increment):
+            signal.signal(signal.SIGTERM, _on_sigterm)
+            signal.signal(signal.SIGINT, _on_sigint)
+    return Signals()
 
 
 def _run(args) -> int:
@@ -130,6 +153,7 @@ def _run(args) -> int:
     if args.verbose:
         _verbose(comm)
     signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGINT, _on_sigint)         # some MPI builds reset Ctrl-C to the default
     try:
         if problem:
             result = run_problem(args.scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
@@ -177,9 +201,19 @@ def main(argv=None) -> int:
                 print(f"comove: {err}", file=sys.stderr)
             return 2
     _quiet_jit()
+    _own_signals()
     from . import check_platform
     check_platform()
     return _scenes() if args.command == "scenes" else _run(args)
+
+
+def _own_signals() -> None:
+    """The command ends cleanly on SIGTERM and Ctrl-C itself: PETSc must not install its own
+    handlers (some builds do, and abort the process on SIGTERM). Before PETSc is loaded."""
+    import os
+    opts = os.environ.get("PETSC_OPTIONS", "")
+    if "-no_signal_handler" not in opts:
+        os.environ["PETSC_OPTIONS"] = f"{opts} -no_signal_handler".strip()
 
 
 def _rank() -> int:
