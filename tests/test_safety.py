@@ -117,8 +117,6 @@ def test_guards_stop_folding_and_warn_of_untrustworthy_results(tmp_path):
     coarse = launch.run([*RUN, "ring", "--out", tmp_path / "coarse", "--no-progress", "--set", "size=100"])
     assert coarse.returncode == 0
     assert "warning: penetration" in coarse.stdout
-    fine = launch.run([*RUN, "ring", "--out", tmp_path / "fine", "--no-progress"])
-    assert "warning" not in fine.stdout                         # the scene at its defaults: nothing to say
 
 
 @pytest.mark.parametrize("n", [1, 2])
