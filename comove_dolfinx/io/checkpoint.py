@@ -19,7 +19,7 @@ import pathlib
 
 import numpy as np
 
-from ..parallel import on_root
+from ..parallel import collective, on_root
 from .writers import Writer, write_atomic
 
 
@@ -92,9 +92,13 @@ class Checkpoint(Writer):
             put("u_factorised", ("V", newton.u_factorised))
         name = self.folder / f"state_{n:05d}_rank{comm.rank}.npz"
         tmp = name.with_name(f".{name.stem}.tmp.npz")
-        np.savez(tmp, **arrays)
-        os.replace(tmp, name)
-        comm.barrier()
+
+        def save():
+            np.savez(tmp, **arrays)
+            os.replace(tmp, name)
+        # every rank's file is complete before meta.json names it; a rank that cannot write (a full
+        # disk) fails the write on every rank instead of leaving the others waiting
+        collective(comm, save)
         meta = {"increment": n, "ranks": comm.size, "step_index": run.step_index,
                 "resume": {"t": rs["t"], "dt": rs["dt"], "step": rs["step"], "easy": rs["easy"],
                            "past_t": [t for t, _ in rs["past"]]},

@@ -68,6 +68,7 @@ class VTK(Writer):
         else:
             self.cell_type = "triangle"
         parts = self.comm.gather((gidx, X, cells), root=0)
+        self.gidx_all = [g for g, _, _ in parts] if self.comm.rank == 0 else None
         if self.comm.rank == 0:
             n = imap.size_global
             self.points = np.zeros((n, 3))
@@ -86,13 +87,11 @@ class VTK(Writer):
     # -- each increment -------------------------------------------------------------------------
     def _gather_points(self, values: np.ndarray) -> np.ndarray | None:
         """Owned nodal values (n_own, k) of the displacement's numbering -> global array on rank 0."""
-        imap = self.model.V.dofmap.index_map
-        gidx = imap.local_to_global(np.arange(self.n_own, dtype=np.int32))
-        parts = self.comm.gather((gidx, values), root=0)
+        parts = self.comm.gather(values, root=0)
         if self.comm.rank != 0:
             return None
-        out = np.zeros((imap.size_global, values.shape[1]))
-        for g, v in parts:
+        out = np.zeros((len(self.points), values.shape[1]))
+        for g, v in zip(self.gidx_all, parts):
             out[g] = v
         return out
 
