@@ -78,7 +78,7 @@ def test_objectivity_rigid_rotation(square, update, monkeypatch):
     if update == "no_rotation":
         assert err > 0.5            # the test detects an update that skips the rotation
     else:
-        assert err < 1e-13
+        assert err < 1e-12          # round-off: measured 1e-13 to 1.8e-13 depending on the machine's libm
 
 
 def _simple_shear(update, gamma, n):

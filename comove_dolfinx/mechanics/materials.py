@@ -5,7 +5,8 @@ A body's material is one of
 * :class:`Elastic` (E, nu): the stress is the stress update's (hypo- or hyperelastic, see updates.py);
 * :class:`J2` (E, nu, hardening): von Mises plasticity, radial return (plane strain, axisymmetry) or
   Simo and Taylor's plane-stress return, with isotropic hardening (docs/theory.md section 4);
-* :class:`Chen` (E, nu, hardening): Chen Zhi-da's single-parameter rate law, integrated explicitly.
+* :class:`Chen` (E, nu, hardening): Chen Zhi-da's single-parameter rate law, integrated implicitly:
+  the radial return on the law's own loading surface (return_maps.chen_loading_surface).
 
 An elastic-plastic material maps, at every quadrature point, the rotated old stress and the trial
 stress of the increment (and the plastic strain of the last converged increment) to the new stress,
@@ -34,8 +35,7 @@ class PointUpdate:
 
     sig: np.ndarray                 # (N, 4) stress at the end of the increment
     p: np.ndarray                   # (N,) equivalent plastic strain
-    D: np.ndarray                   # (N, 4, 4) d sig / d sig_tr
-    D_rot: np.ndarray | None        # (N, 4, 4) d sig / d sig_rot (None where sig depends on sig_tr only)
+    D: np.ndarray                   # (N, 4, 4) d sig / d sig_tr (sig depends on sig_rot through sig_tr only)
     ezz: np.ndarray | None = None   # plane stress: log thickness strain of the increment
     dezz_tr: np.ndarray | None = None    # (N, 4) its derivative by sig_tr
     dezz_rot: np.ndarray | None = None   # (N, 4) its derivative by sig_rot
@@ -61,7 +61,7 @@ class Plastic:
         out = self._update(sig_rot, sig_tr, p_n, kind)
         if kind == PLANE_STRESS:
             out.ezz, out.dezz_tr, out.dezz_rot = rm.plane_stress_thickness(
-                out.sig, sig_tr, sig_rot, out.D, out.D_rot, self.elastic)
+                out.sig, sig_tr, sig_rot, out.D, self.elastic)
         return out
 
     def facet(self, sig_rot, sig_tr, p_n, kind: str):
@@ -83,27 +83,35 @@ class J2(Plastic):
 
     law = "j2"
 
+    @property
+    def surface(self) -> Hardening:
+        """The loading surface sigma_eq = Y(p) that the return map holds the stress on."""
+        return self.hardening
+
     def _update(self, sig_rot, sig_tr, p_n, kind):
-        sig, p, D, _ = rm.j2_return(sig_tr, p_n, self.elastic, self.hardening, kind)
-        return PointUpdate(sig, p, D, None)
+        sig, p, D, _ = rm.j2_return(sig_tr, p_n, self.elastic, self.surface, kind)
+        return PointUpdate(sig, p, D)
 
     def _facet(self, sig_rot, sig_tr, p_n, kind):
         if kind == PLANE_STRESS:
-            return rm_ufl.j2_return_plane_stress(sig_tr, p_n, self.elastic, self.hardening)
-        return rm_ufl.j2_return(sig_tr, p_n, self.elastic, self.hardening)
+            return rm_ufl.j2_return_plane_stress(sig_tr, p_n, self.elastic, self.surface)
+        return rm_ufl.j2_return(sig_tr, p_n, self.elastic, self.surface)
 
 
-class Chen(Plastic):
-    """Chen Zhi-da's single-parameter rate law, one explicit step per increment."""
+class Chen(J2):
+    """Chen Zhi-da's single-parameter rate law, beta = 1 - E_t / (3G) (docs/theory.md section 4.4),
+    integrated implicitly: the same flow as J2, held on the law's own loading surface, whose slope
+    3G E_t / (3G - E_t) follows from beta (return_maps.chen_loading_surface)."""
 
     law = "chen"
 
-    def _update(self, sig_rot, sig_tr, p_n, kind):
-        sig, p, D, D_rot, _ = rm.chen_update(sig_rot, sig_tr, p_n, self.elastic, self.hardening, kind)
-        return PointUpdate(sig, p, D, D_rot)
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "_surface", rm.chen_loading_surface(self.elastic, self.hardening))
 
-    def _facet(self, sig_rot, sig_tr, p_n, kind):
-        return rm_ufl.chen_update(sig_rot, sig_tr, p_n, self.elastic, self.hardening, kind)
+    @property
+    def surface(self) -> Hardening:
+        return self._surface
 
 
 LAWS = {"j2": J2, "chen": Chen}

@@ -140,15 +140,12 @@ class Model:
                 R = R + term
         self.bcs = [bc for item in self.items for bc in item.bcs]
         # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
-        # (+ D_rot d sigma_rot) and, in plane-stress plasticity, the thickness stretch's part
+        # and, in plane-stress plasticity, the thickness stretch's part
         dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
         dsig = to_tensor(dsig_tr)
         if self.plastic is not None:
             dsig_rot = to_vec(ufl.derivative(up.sigma_rot, u, self.u_trial))
-            dvec = ufl.dot(st.D, dsig_tr)
-            if st.D_rot is not None:
-                dvec = dvec + ufl.dot(st.D_rot, dsig_rot)
-            dsig = to_tensor(dvec)
+            dsig = to_tensor(ufl.dot(st.D, dsig_tr))
         Jac = ufl.derivative(R, u, self.u_trial) + \
             ufl.inner(J * dsig * ufl.inv(F).T, self.kin.grad3(v)) * w * dx
         if st.F22 is not None:

@@ -41,9 +41,8 @@ from .material_data import (
     von_mises,
 )
 
-__all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_update", "deviator", "j2_return",
-           "plane_stress_thickness",
-           "von_mises"]
+__all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_loading_surface", "deviator", "j2_return",
+           "plane_stress_thickness", "von_mises"]
 
 
 def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
@@ -195,117 +194,30 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     return sig, p, D, deps_p
 
 
-def chen_update(sig_rot: ArrayLike, sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
-                model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """One explicit increment of Chen Zhi-da's single-parameter law (docs/theory.md section 4.4).
+def chen_loading_surface(elastic: Elastic, hardening: Hardening) -> Hardening:
+    """The loading surface sigma_eq = Y(p) of Chen Zhi-da's single-parameter law (docs/theory.md 4.4).
 
-    Rate law: s_dot = 2G [e_dot - beta (s:e_dot) s / (s:s)] with beta = 1 - E_t / (3G) on loading and 0 on
-    unloading; the volumetric part is elastic. E_t = E H / (E + H) is the uniaxial tangent from the hardening
-    slope H at p_n. The straight stress path from sig_rot to sig_tr is elastic up to the fraction r where it
-    meets the yield surface sigma_eq = sigma_y(p_n) (r = 0 if sig_rot is already on or outside it); the rest
-    (1 - r) follows the rate law with s frozen at the crossing point s_c (forward Euler), provided
-    s_c : (sig_tr - sig_rot) > 0. In plane stress the rate law is condensed so that sigma_zz stays 0. The
-    result in all models is sig = sig_tr - kappa C s_c with the model's stiffness C and
-    kappa = (1 - r) s_c:(sig_tr - sig_rot) / (2G (1 - beta)/beta s_c:s_c + s_c:C s_c); deps_p = kappa s_c
-    and p grows by the plastic work, sigma_eq(s_c) dp = s_c : deps_p.
+    On plastic loading the rate law s_dot = 2G [e_dot - beta (s:e_dot) s / (s:s)] moves the equivalent
+    stress and the plastic strain (sigma_eq p_dot = s : eps_dot^p) in the ratio
 
-    Parameters
-    ----------
-    sig_rot : array_like, (N, 4)
-        Stress at the start of the increment, already rotated to the current configuration.
-    sig_tr : array_like, (N, 4)
-        sig_rot plus the elastic predictor C : deps (zz = 0 for "plane_stress").
-    p_n : array_like, (N,)
-        Equivalent plastic strain at the start of the increment.
-    elastic, hardening, model
-        As in :func:`j2_return`.
+        d sigma_eq / dp = 3G (1 - beta) / beta = 3G E_t / (3G - E_t),   beta = 1 - E_t / (3G),
 
-    Returns
-    -------
-    sig, p, deps_p
-        As in :func:`j2_return`.
-    D_tr, D_rot : (N, 4, 4)
-        d sig / d sig_tr and d sig / d sig_rot of the discrete map (exact away from the switches between
-        elastic, crossing and plastic points); zz rows and columns are zero in plane stress.
-
-    Notes
-    -----
-    The update is explicit and the drift off the surface sigma_eq = sigma_y(p) is not corrected:
-    outwards by O(increment^2) per plastic step where the direction of straining turns (the surface is
-    convex), i.e. O(increment) after a corner of the path; the next loading step starts from the drifted
-    stress with r = 0. For nu < 0.5, beta exceeds the J2 value 3G / (3G + H) and p grows faster than
-    the table needs: the next increment starts inside the surface and its first part is elastic, so in the
-    limit of small increments the law follows sigma_eq = sigma_y(p) with the J2 flow and the
-    compressibility difference between the two laws (docs/theory.md section 4.4) disappears.
+    E_t = E H / (E + H) the uniaxial tangent of the table slope H. Holding the stress on this surface
+    (the consistency condition) and taking the flow direction at the end of the increment is the implicit
+    integration of the law: J2's radial return on Y. H is constant on each segment of the table, so Y is
+    piecewise linear on the table's strains; it equals the table when E = 3G (nu = 0.5) and lies below it
+    for nu < 0.5 (the compressibility difference of the two laws).
     """
-    check_model(model)
-    x, y = as_points(sig_tr, "sig_tr"), as_points(sig_rot, "sig_rot")
-    if x.shape != y.shape:
-        raise ValueError(f"sig_tr {x.shape} and sig_rot {y.shape} must have the same shape")
-    p_n = np.broadcast_to(np.asarray(p_n, dtype=float), x.shape[:1]).copy()
-    if model == "plane_stress":
-        check_plane_stress(x, "sig_tr")
-        check_plane_stress(y, "sig_rot")
-        x[:, 2] = y[:, 2] = 0.0
-    C = elastic.stiffness(model)
-    G = elastic.mu
-    d = x - y
-    s0, ds = deviator(y), deviator(d)
-    y_n = hardening.sigma_y(p_n)
-    # the path s0 + t ds meets the surface 3/2 |s|^2 = sigma_y^2 where qa t^2 + qb t + qc = 0
-    qa, qb, qc = ddot(ds, ds), 2.0 * ddot(s0, ds), ddot(s0, s0) - 2.0 / 3.0 * y_n ** 2
-    outside = qc >= 0.0
-    crossing = ~outside & (qa + qb + qc > 0.0)
-    r = np.zeros(len(x))
-    j = np.flatnonzero(crossing)
-    disc = np.sqrt(qb[j] ** 2 - 4.0 * qa[j] * qc[j])
-    r[j] = np.where(qb[j] >= 0.0, -2.0 * qc[j] / (qb[j] + disc), (disc - qb[j]) / (2.0 * qa[j]))
-    s_c = s0 + r[:, None] * ds
-    a = ddot(s_c, d)
-    sig, p, deps_p = x.copy(), p_n.copy(), np.zeros_like(x)
-    eye = np.diag([1.0, 1.0, 0.0, 1.0]) if model == "plane_stress" else np.eye(4)
-    D_tr = np.tile(eye, (len(x), 1, 1))
-    D_rot = np.zeros_like(D_tr)
-    i = np.flatnonzero((outside | crossing) & (a > 0.0))
-    if i.size == 0:
-        return sig, p, D_tr, D_rot, deps_p
-    r, sc, d, ds, a, cross = r[i], s_c[i], d[i], ds[i], a[i], crossing[i]
-    h = hardening.slope(p_n[i])
-    beta = 1.0 - elastic.E * h / (elastic.E + h) / (3.0 * G)   # > 0 since E_t < E < 3G
-    g1 = 2.0 * G * (1.0 - beta) / beta
-    Ws, Cs = WEIGHT * sc, sc @ C.T
-    ss = np.sum(Ws * sc, axis=1)
-    den = g1 * ss + np.sum(Ws * Cs, axis=1)
-    kappa = (1.0 - r) * a / den
-    sig[i] = x[i] - kappa[:, None] * Cs
-    deps_p[i] = kappa[:, None] * sc
-    p[i] += 2.0 / 3.0 * kappa * np.sqrt(1.5 * ss)
-    # tangents: r(x, y) from s_c:s_c = 2/3 sigma_y^2 at crossing points, constant elsewhere
-    gd = np.sum(Ws * ds, axis=1)
-    fr = np.divide(1.0, gd, out=np.zeros_like(gd), where=cross)
-    r_x, r_y = (-r * fr)[:, None] * Ws, (-(1.0 - r) * fr)[:, None] * Ws
-    J_x = r[:, None, None] * PDEV + ds[:, :, None] * r_x[:, None, :]         # d s_c / d x
-    J_y = (1.0 - r)[:, None, None] * PDEV + ds[:, :, None] * r_y[:, None, :]
-    Wd = WEIGHT * d
-    a_x = np.einsum("nij,ni->nj", J_x, Wd) + Ws
-    a_y = np.einsum("nij,ni->nj", J_y, Wd) - Ws
-    v = 2.0 * g1[:, None] * Ws + WEIGHT * Cs + Ws @ C                        # d den / d s_c
-    for J, r_, a_, D, direct in ((J_x, r_x, a_x, D_tr, True), (J_y, r_y, a_y, D_rot, False)):
-        den_ = np.einsum("nij,ni->nj", J, v)
-        k_ = ((-a / den)[:, None] * r_ + ((1.0 - r) / den)[:, None] * a_
-              - ((1.0 - r) * a / den ** 2)[:, None] * den_)
-        Di = -Cs[:, :, None] * k_[:, None, :] - kappa[:, None, None] * np.einsum("ij,njk->nik", C, J)
-        D[i] = Di + eye if direct else Di
-    if model == "plane_stress":
-        for D in (D_tr, D_rot):
-            D[:, 2, :] = 0.0
-            D[:, :, 2] = 0.0
-    return sig, p, D_tr, D_rot, deps_p
+    p0, s0, h = hardening.segments
+    three_g = 3.0 * elastic.mu
+    e_t = elastic.E * h / (elastic.E + h)
+    h_c = three_g * e_t / (three_g - e_t)                 # > 0 where H > 0, since E_t < E < 3G
+    stress = s0[0] + np.concatenate([[0.0], np.cumsum(h_c[:-1] * np.diff(p0))])
+    return Hardening(tuple(p0), tuple(stress), tail_slope=float(h_c[-1]))
 
 
 def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndarray, D: np.ndarray,
-                           D_rot: np.ndarray | None, elastic: Elastic
-                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                           elastic: Elastic) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Thickness strain of a plane-stress increment and its derivatives (any law with sigma_zz = 0).
 
     Both laws of this module end with sig = sig_tr - C_ps deps_p on the in-plane components, with a
@@ -315,8 +227,8 @@ def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndar
 
         ezz = -nu/E tr2(sig - sig_rot) - (1 - nu)/E tr2(sig_tr - sig),
 
-    and F22 = F22_n exp(ezz). Its derivatives follow from D = d sig / d sig_tr and D_rot = d sig /
-    d sig_rot (zero for J2, whose result does not depend on sig_rot apart from sig_tr).
+    and F22 = F22_n exp(ezz). Its derivatives follow from D = d sig / d sig_tr (the return maps of this
+    module depend on sig_rot only through sig_tr).
 
     Returns
     -------
@@ -330,7 +242,6 @@ def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndar
     e = np.array([1.0, 1.0, 0.0, 0.0])
     rows = lambda M: M[:, 0, :] + M[:, 1, :]       # noqa: E731  d tr2(sig) / d input
     dtr = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
-    drot = nu / E * e + (0.0 if D_rot is None else (1.0 - 2.0 * nu) / E * rows(D_rot))
-    drot = np.broadcast_to(drot, dtr.shape).copy()
+    drot = np.broadcast_to(nu / E * e, dtr.shape).copy()
     dtr[:, 2] = drot[:, 2] = 0.0
     return ezz, dtr, drot

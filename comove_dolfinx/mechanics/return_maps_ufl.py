@@ -109,32 +109,6 @@ def j2_return_plane_stress(sig_tr, p_n, elastic: Elastic, hardening: Hardening, 
     return ufl.conditional(ufl.gt(q, y_n), sig, sig_tr)
 
 
-def chen_update(sig_rot, sig_tr, p_n, elastic: Elastic, hardening: Hardening, model: str):
-    """One explicit increment of Chen's single-parameter law (as materials.chen_update)."""
-    G = elastic.mu
-    d = sig_tr - sig_rot
-    s0, ds = ufl.dev(sig_rot), ufl.dev(d)
-    y_n = sigma_y(hardening, p_n)
-    qa, qb = ufl.inner(ds, ds), 2.0 * ufl.inner(s0, ds)
-    qc = ufl.inner(s0, s0) - 2.0 / 3.0 * y_n ** 2
-    outside = ufl.ge(qc, 0.0)
-    crossing = ufl.And(ufl.Not(outside), ufl.gt(qa + qb + qc, 0.0))
-    disc = ufl.sqrt(ufl.max_value(qb ** 2 - 4.0 * qa * qc, _TINY))
-    root = ufl.conditional(ufl.ge(qb, 0.0), -2.0 * qc / (qb + disc),
-                           (disc - qb) / (2.0 * ufl.max_value(qa, _TINY)))
-    r = ufl.conditional(crossing, root, 0.0)
-    s_c = s0 + r * ds
-    a = ufl.inner(s_c, d)
-    h = slope(hardening, p_n)
-    beta = 1.0 - elastic.E * h / (elastic.E + h) / (3.0 * G)
-    g1 = 2.0 * G * (1.0 - beta) / beta
-    Cs = hooke(s_c, elastic, model)
-    den = g1 * ufl.inner(s_c, s_c) + ufl.inner(s_c, Cs)
-    kappa = (1.0 - r) * a / den
-    plastic = ufl.And(ufl.Or(outside, crossing), ufl.gt(a, 0.0))
-    return ufl.conditional(plastic, sig_tr - kappa * Cs, sig_tr)
-
-
 def plane_stress_thickness(sig, sig_tr, sig_rot, elastic: Elastic):
     """Logarithmic thickness strain of a plane-stress increment (materials.plane_stress_thickness)."""
     E, nu = elastic.E, elastic.nu

@@ -2,8 +2,8 @@
 
 Quadrature functions (4-vectors xx, yy, zz, xy; see kinematics.py): ``sigma_n`` the converged state of
 increment n (the stress, or for the polar update the unrotated stress), ``sigma`` the stress at the
-current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain, ``D`` (and
-``D_rot`` for Chen's law) the derivatives of the return map; in plane-stress plasticity ``F22_n``/``F22``
+current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain, ``D`` the
+derivative of the return map; in plane-stress plasticity ``F22_n``/``F22``
 the thickness stretch, F22 = F22_n exp(ezz), and ``G_tr``/``G_rot`` the derivatives of ezz
 (docs/theory.md section 4.3).
 
@@ -39,7 +39,6 @@ class QuadratureState:
         self.p_n = r.function((), "p_n") if plastic else None
         self.p = r.function((), "p") if plastic else None
         self.D = r.function((4, 4), "D") if plastic else None
-        self.D_rot = r.function((4, 4), "D_rot") if plastic and plastic.law == "chen" else None
         self.F22_n = self.F22 = self.G_tr = self.G_rot = None
         if plastic and kind == "plane_stress":
             self.F22_n = r.function((), "F22_n", 1.0)
@@ -69,8 +68,6 @@ class QuadratureState:
             view(self.sigma)[:] = out.sig
             self.p.x.array[:] = out.p
             view(self.D)[:] = out.D
-            if self.D_rot is not None:
-                view(self.D_rot)[:] = out.D_rot
             if self.F22 is not None:
                 self.F22.x.array[:] = self.F22_n.x.array * np.exp(out.ezz)
                 view(self.G_tr)[:] = out.dezz_tr

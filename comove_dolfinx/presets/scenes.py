@@ -204,9 +204,8 @@ class Ring(ContactScene):
         "R_out": "outer radius [cm]", "wall": "wall thickness [cm]",
         "delta_max": "final approach of the two plates [cm]",
         "hardening": "yield stress table p:sigma_y [kgf/cm^2], flat beyond the last point",
-        "law": "plasticity: j2 (return mapping) or chen (Chen's single-parameter rate law: no "
-               "return to the yield surface, so its error is first order in the increment; "
-               "give it about 16 x the increments of j2, see README)",
+        "law": "plasticity: j2 (return mapping on the hardening table) or chen (Chen's "
+               "single-parameter rate law: the return on its own loading surface, docs/theory.md 4.4)",
         "plane": "plane_strain or plane_stress"}
 
     E: float = 1.89e6
