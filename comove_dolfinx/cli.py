@@ -193,7 +193,15 @@ def main(argv=None) -> int:
     run.add_argument("--checkpoint-every", type=int, default=1, metavar="K",
                      help="save the state every K converged increments (default 1)")
     sub.add_parser("scenes", help="list the scenes and their parameters with defaults")
+    st = sub.add_parser("study", help="speed against accuracy across methods (docs/study.md)")
+    st.add_argument("scene", help="elastica, beam, plate, ring or all")
+    st.add_argument("--out", default="results/study", help="output folder (default results/study)")
+    st.add_argument("--repeat", type=int, default=3, help="runs of each case, for the CPU time's spread")
+    st.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2)")
+    st.add_argument("--quick", action="store_true", help="the updates' sweeps only, fewer increments")
     args = parser.parse_args(argv)
+    if args.command == "study":
+        return _study(args)
     if args.command == "run":
         err = _check_early(args)
         if err is not None:
@@ -205,6 +213,32 @@ def main(argv=None) -> int:
     from . import check_platform
     check_platform()
     return _scenes() if args.command == "scenes" else _run(args)
+
+
+def _study(args) -> int:
+    """The study runs every case as its own ``comove run`` process: nothing heavy is loaded here."""
+    import pathlib
+
+    from .study import PLANS
+    from .study import main as study_main
+    scenes = list(PLANS) if args.scene == "all" else [args.scene]
+    err = None
+    if any(s not in PLANS for s in scenes):
+        err = f"study {args.scene!r}: choose one of {', '.join(PLANS)} or all"
+    elif args.repeat < 1 or args.jobs < 1:
+        err = f"--repeat {args.repeat} --jobs {args.jobs}: give whole numbers >= 1"
+    elif not args.out.strip():
+        err = "--out '': give the output folder"
+    out = pathlib.Path(args.out)
+    if err is None:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            err = f"--out {args.out}: cannot make the folder ({e.strerror}); choose another place"
+    if err is not None:
+        print(f"comove: {err}", file=sys.stderr)
+        return 2
+    return study_main(scenes, out, args.repeat, args.jobs, args.quick)
 
 
 def _own_signals() -> None:

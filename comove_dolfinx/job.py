@@ -18,6 +18,7 @@ its message; the results hold every increment converged before.
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -89,6 +90,25 @@ class Step:
                 item.hold()
 
 
+def process_clock() -> tuple[float, float, float]:
+    """(wall seconds since this process started, CPU seconds of the process, CPU seconds of the
+    child processes it waited for: the C compiler of the form compiler). The start is read from
+    /proc (Linux); elsewhere the wall time counts from the import of this module."""
+    import resource
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    try:
+        with open("/proc/self/stat") as fh:
+            start = float(fh.read().rsplit(")", 1)[1].split()[19]) / os.sysconf("SC_CLK_TCK")
+        with open("/proc/uptime") as fh:
+            wall = float(fh.read().split()[0]) - start
+    except (OSError, ValueError, IndexError):
+        wall = time.perf_counter() - _IMPORTED
+    return wall, me.ru_utime + me.ru_stime, kids.ru_utime + kids.ru_stime
+
+
+_IMPORTED = time.perf_counter()
+
+
 @dataclass
 class Results:
     """A job's outcome: the history as columns, the increments, Newton statistics and timing."""
@@ -100,8 +120,9 @@ class Results:
     message: str = ""
     wall_s: float = 0.0
     dofs: int = 0
-    timing: dict = field(default_factory=dict)
+    timing: dict = field(default_factory=dict)      # wall seconds per part of the whole process
     timing_report: str = ""
+    process: dict = field(default_factory=dict)     # wall_s, cpu_s, compiler_cpu_s of the process
     contact: dict = field(default_factory=dict)
     interrupted: bool = False       # by a signal or Ctrl-C (the exception goes on after the writers)
     warnings: list = field(default_factory=list)
@@ -168,7 +189,7 @@ class Job:
     def run(self, progress: bool = False, restart=None) -> Results:
         """Compile, run every step, write; returns the :class:`Results` (also when a step fails).
         ``restart``: a checkpoint folder (io.Checkpoint) to go on from, with the same ranks."""
-        t_start = time.perf_counter()
+        t_start, before = time.perf_counter(), process_clock()[0]
         timer = Timer()
         with timer("setup and compilation"):
             model = Model(self.body, self.items)
@@ -250,12 +271,26 @@ class Job:
         finally:
             bar.close()
             res.wall_s = time.perf_counter() - t_start
-            res.timing, res.timing_report = dict(timer.totals), timer.report()
+            self._account(res, timer, before)
             res.contact = stats if contacts else {}
             res.warnings = list(run.warnings)
             for w in self.writers:
                 collective(comm, w.close, run, res)
         return res
+
+    @staticmethod
+    def _account(res: Results, timer: Timer, before: float) -> None:
+        """The timing of the whole process: what came before the run (start-up, imports, mesh), the
+        parts the run timed, the rest of the run; and the process's wall and CPU seconds."""
+        wall, cpu, compiler = process_clock()
+        parts = {"before the run (start-up, imports, mesh)": before, **timer.totals}
+        parts["other"] = max(res.wall_s - sum(timer.totals.values()), 0.0)
+        report = Timer()
+        report.totals.update(parts)
+        res.timing = dict(parts)
+        res.process = {"wall_s": wall, "cpu_s": cpu, "compiler_cpu_s": compiler}
+        res.timing_report = (f"{report.report()}\nprocess: wall {wall:.2f} s, CPU {cpu + compiler:.2f} s "
+                             f"({compiler:.2f} s of it in the C compiler)")
 
     #: a penetration beyond this fraction of the smallest cell is warned about
     PENETRATION_WARNING = 0.02

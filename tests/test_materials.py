@@ -1,4 +1,4 @@
-"""Material-point tests of the materials (comove_dolfinx.mechanics): validation, closed forms, tangents, isotropy, Chen vs J2.
+"""Material-point tests of the materials: validation, closed forms, tangents, isotropy, Chen against J2 and its rate law.
 
 Stored tensors are (xx, yy, zz, xy) with the tensor shear component; see the module docstring.
 """
@@ -6,7 +6,15 @@ Stored tensors are (xx, yy, zz, xy) with the tensor shear component; see the mod
 import numpy as np
 import pytest
 
-from comove_dolfinx.mechanics.material_data import MODELS, WEIGHT, Elastic, Hardening, MaterialError, deviator, von_mises
+from comove_dolfinx.mechanics.material_data import (
+    MODELS,
+    WEIGHT,
+    Elastic,
+    Hardening,
+    MaterialError,
+    deviator,
+    von_mises,
+)
 from comove_dolfinx.mechanics.materials import Chen
 from comove_dolfinx.mechanics.return_maps import chen_loading_surface, j2_return
 

@@ -24,8 +24,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .. import compat
-from ..names import CONTACT_METHODS as METHODS
 from ..loads import Item
+from ..names import CONTACT_METHODS as METHODS
 from . import laws
 from .obstacles import ContactError, Obstacle
 
@@ -128,7 +128,8 @@ class Contact(Item):
             else:
                 p_lag = laws.positive_part(ufl.dot(obs.normal(x_lag, d_lag), ctx.facet_traction(N, self.u_lag))
                                            - gamma * g_lag)
-            s = self.mu * p_lag
+            self._mu_c = fem.Constant(msh, PETSc.ScalarType(self.mu))   # no recompile for a new mu
+            s = self._mu_c * p_lag
             slip = ufl.dot(t_o, (u - u_n) - (obs.d - self._d_n))
             if self.method == "penalty":
                 self.e_n = fem.Function(compat.function_space(msh, "Lagrange", ctx.degree), name="stick_slip")

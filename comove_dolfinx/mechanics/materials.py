@@ -64,17 +64,19 @@ class Plastic:
                 out.sig, sig_tr, sig_rot, out.D, self.elastic)
         return out
 
-    def facet(self, sig_rot, sig_tr, p_n, kind: str):
-        """The same law in UFL at a facet point: (stress, thickness strain or None)."""
-        sig = self._facet(sig_rot, sig_tr, p_n, kind)
-        ezz = (rm_ufl.plane_stress_thickness(sig, sig_tr, sig_rot, self.elastic)
+    def facet(self, sig_rot, sig_tr, p_n, kind: str, elastic=None):
+        """The same law in UFL at a facet point: (stress, thickness strain or None). ``elastic``: the
+        elastic constants as UFL values (e.g. the model's Constants; default this material's numbers)."""
+        elastic = self.elastic if elastic is None else elastic
+        sig = self._facet(sig_rot, sig_tr, p_n, kind, elastic)
+        ezz = (rm_ufl.plane_stress_thickness(sig, sig_tr, sig_rot, elastic)
                if kind == PLANE_STRESS else None)
         return sig, ezz
 
     def _update(self, sig_rot, sig_tr, p_n, kind) -> PointUpdate:  # pragma: no cover - interface
         raise NotImplementedError
 
-    def _facet(self, sig_rot, sig_tr, p_n, kind):  # pragma: no cover - interface
+    def _facet(self, sig_rot, sig_tr, p_n, kind, elastic):  # pragma: no cover - interface
         raise NotImplementedError
 
 
@@ -92,10 +94,10 @@ class J2(Plastic):
         sig, p, D, _ = rm.j2_return(sig_tr, p_n, self.elastic, self.surface, kind)
         return PointUpdate(sig, p, D)
 
-    def _facet(self, sig_rot, sig_tr, p_n, kind):
+    def _facet(self, sig_rot, sig_tr, p_n, kind, elastic):
         if kind == PLANE_STRESS:
-            return rm_ufl.j2_return_plane_stress(sig_tr, p_n, self.elastic, self.surface)
-        return rm_ufl.j2_return(sig_tr, p_n, self.elastic, self.surface)
+            return rm_ufl.j2_return_plane_stress(sig_tr, p_n, elastic, self.surface)
+        return rm_ufl.j2_return(sig_tr, p_n, elastic, self.surface)
 
 
 class Chen(J2):

@@ -24,6 +24,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from mpi4py import MPI
+from petsc4py import PETSc
 from ufl.algorithms import expand_derivatives
 
 from .. import compat
@@ -35,6 +36,20 @@ from .state import InvertedElement, QuadratureState, ReturnMapFailure
 from .updates import make_update
 
 __all__ = ["Context", "InvertedElement", "Model", "ReturnMapFailure"]
+
+
+class ElasticConstants:
+    """Young's modulus and Poisson's ratio as dolfinx Constants, with the moduli that the UFL laws use
+    derived from them: the generated code does not hold their values, so models that differ only in
+    the material constants share their compiled forms (and the JIT cache)."""
+
+    def __init__(self, msh, elastic):
+        self.E = fem.Constant(msh, PETSc.ScalarType(elastic.E))
+        self.nu = fem.Constant(msh, PETSc.ScalarType(elastic.nu))
+        E, nu = self.E, self.nu
+        self.mu = E / (2.0 * (1.0 + nu))
+        self.lmbda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+        self.lmbda_plane_stress = E * nu / (1.0 - nu * nu)
 
 
 @dataclass
@@ -80,7 +95,8 @@ class Model:
         self.x = ufl.SpatialCoordinate(msh)
         self.kin = Kinematics(body.kind, self.x, body.thickness)
         self.rule = QuadratureRule(msh, body.rule_degree())
-        self.update = make_update(body.update, self.kin, self.elastic)
+        self.constants = ElasticConstants(msh, self.elastic)
+        self.update = make_update(body.update, self.kin, self.constants)
         self.V = compat.function_space(msh, "Lagrange", body.degree, (2,))
         self.u = fem.Function(self.V, name="displacement")
         self.u_n = fem.Function(self.V, name="displacement_n")
@@ -152,6 +168,7 @@ class Model:
             # the direction of a derivative must be free of unevaluated derivatives
             dF22 = expand_derivatives(st.F22 * (ufl.dot(st.G_tr, dsig_tr) + ufl.dot(st.G_rot, dsig_rot)))
             Jac = Jac + ufl.derivative(internal, st.F22, dF22)
+        self.residual_ufl = R                 # (its signature names the compiled code)
         self.residual_form = compat.form(R, jit_options)
         self.jacobian_form = compat.form(Jac, jit_options)
         # everything the constitutive stage needs, in one evaluation per iteration
@@ -186,7 +203,7 @@ class Model:
         sig, F22 = up.sigma, up.F22
         if self.plastic is not None:
             p_n = ufl.max_value(st.facet("p_n"), 0.0)            # the fit may dip below 0
-            sig, ezz = self.plastic.facet(up.sigma_rot, up.sigma, p_n, self.kin.model)
+            sig, ezz = self.plastic.facet(up.sigma_rot, up.sigma, p_n, self.kin.model, self.constants)
             if ezz is not None:
                 F22 = st.facet("F22_n") * ufl.exp(ezz)
         F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)

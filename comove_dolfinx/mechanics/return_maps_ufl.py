@@ -10,13 +10,13 @@ is exact (the derivative of the conditional branches is the consistent tangent).
 The functions mirror their NumPy counterparts step for step (same branches, same segment search of
 the hardening table), and the tests check them against each other. Stresses are 3x3 UFL tensors
 (index 2 out of plane, or the hoop direction in axisymmetry); in plane stress their zz entries are 0.
+``elastic`` is any object with E, nu and mu, numbers or UFL values (the model passes Constants).
 """
 from __future__ import annotations
 
 import ufl
 
-from .material_data import Elastic, Hardening
-from .updates import hooke
+from .material_data import Hardening
 
 # floor under squared norms whose square root is taken (its branch is never the selected one there)
 _TINY = 1e-300
@@ -58,7 +58,7 @@ def _solve_dp(hardening: Hardening, q, pn, three_mu):
     return dp
 
 
-def j2_return(sig_tr, p_n, elastic: Elastic, hardening: Hardening):
+def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
     """Radial return of J2 plasticity with isotropic hardening (plane strain, axisymmetry)."""
     s = ufl.dev(sig_tr)
     q = ufl.sqrt(ufl.max_value(1.5 * ufl.inner(s, s), _TINY))
@@ -67,7 +67,7 @@ def j2_return(sig_tr, p_n, elastic: Elastic, hardening: Hardening):
     return ufl.conditional(ufl.gt(q, sigma_y(hardening, p_n)), sig_tr - three_mu * dp / q * s, sig_tr)
 
 
-def j2_return_plane_stress(sig_tr, p_n, elastic: Elastic, hardening: Hardening, newton_steps: int = 12):
+def j2_return_plane_stress(sig_tr, p_n, elastic, hardening: Hardening, newton_steps: int = 12):
     """Plane-stress J2 return (Simo and Taylor's scalar equation in dgamma, as materials._j2_plane_stress):
     the hardening segment in closed form, then ``newton_steps`` unrolled Newton steps on that segment
     from the same start (the function is smooth and monotone there: round-off in fewer than 8)."""
@@ -109,7 +109,7 @@ def j2_return_plane_stress(sig_tr, p_n, elastic: Elastic, hardening: Hardening, 
     return ufl.conditional(ufl.gt(q, y_n), sig, sig_tr)
 
 
-def plane_stress_thickness(sig, sig_tr, sig_rot, elastic: Elastic):
+def plane_stress_thickness(sig, sig_tr, sig_rot, elastic):
     """Logarithmic thickness strain of a plane-stress increment (materials.plane_stress_thickness)."""
     E, nu = elastic.E, elastic.nu
     tr2 = lambda s: s[0, 0] + s[1, 1]         # noqa: E731

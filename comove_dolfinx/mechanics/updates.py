@@ -22,6 +22,10 @@ sigma_zz = 0 identically; their thickness stretch is the exact integral of the e
 d_zz = -lambda/(lambda + 2 mu) tr(d_plane)  =>  F_zz = J_plane^(-lambda/(lambda + 2 mu)).
 The hyperelastic laws solve S_zz = 0 for F_zz (in closed form for St Venant-Kirchhoff, by a few unrolled
 Newton steps, converged to round-off, for neo-Hookean).
+
+The elastic constants come as any object with ``mu``, ``lmbda`` and ``lmbda_plane_stress``: numbers
+(material_data.Elastic) or UFL values (the model's ElasticConstants, so that the compiled code does not
+depend on them).
 """
 from __future__ import annotations
 
@@ -39,7 +43,6 @@ from .kinematics import (
     to_tensor,
     to_vec,
 )
-from .material_data import Elastic
 
 
 @dataclass
@@ -52,7 +55,7 @@ class UpdateExpr:
     F22: object = None            # thickness stretch in plane stress, when the update fixes it
 
 
-def hooke(dE, elastic: Elastic, model: str):
+def hooke(dE, elastic, model: str):
     """Isotropic elastic law C:dE on a 3x3 tensor; plane stress uses the reduced lambda, zz -> 0."""
     if model == PLANE_STRESS:
         e2 = ufl.as_tensor([[dE[0, 0], dE[0, 1]], [dE[1, 0], dE[1, 1]]])
@@ -68,7 +71,7 @@ class StressUpdate:
     incremental = True            # uses the stored stress of increment n
     rotates = True                # has a rotated old stress (can carry plasticity)
 
-    def __init__(self, kin: Kinematics, elastic: Elastic):
+    def __init__(self, kin: Kinematics, elastic):
         self.kin = kin
         self.elastic = elastic
 
@@ -194,7 +197,7 @@ UPDATES = {cls.name: cls for cls in (SRUpdate, HughesWingetUpdate, PolarUpdate, 
                                      NeoHookeUpdate)}
 
 
-def make_update(name: str, kin: Kinematics, elastic: Elastic) -> StressUpdate:
+def make_update(name: str, kin: Kinematics, elastic) -> StressUpdate:
     """The update called ``name`` (ValueError listing the known names otherwise)."""
     try:
         return UPDATES[name](kin, elastic)

@@ -1,0 +1,58 @@
+"""One study of speed against accuracy across methods, per scene (docs/study.md).
+
+    comove study ring --out results/study          # or: elastica, beam, plate, all
+    make study                                       # all four scenes
+
+Per scene it writes ``runs.csv`` (every run: method, settings, status, q, error, Newton iterations,
+CPU seconds), ``reference.json``, ``pareto.png`` (error against CPU seconds, a curve per method, the
+Pareto front; q against the increments) and ``summary.md``; over the scenes ``claim.csv`` and
+``study.md``: for each stress update the fewest increments and the least CPU to reach 1 % and 0.1 %.
+"""
+from __future__ import annotations
+
+import json
+import pathlib
+import time
+
+from .plan import PLANS
+
+__all__ = ["PLANS", "study"]
+
+
+def study(scene: str, out: pathlib.Path, repeat: int = 3, jobs: int = 2, quick: bool = False,
+          echo=print) -> tuple[list[dict], dict, list[dict]]:
+    """Run the study of ``scene`` into out/<scene>; (rows, reference, claim rows)."""
+    from . import report, runner
+    plan = PLANS[scene]
+    folder = out / scene
+    folder.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+
+    def say(case, row):
+        echo(f"  {scene}: {case.family:22s} {' '.join(case.sets):45s} {row['status']:10s} "
+             f"q {row['q']:.6g}  {row['newton_its']:4d} its  {row['cpu_s']:6.2f} s")
+    ref_cases = plan.reference_cases()
+    ref_rows = dict(zip(ref_cases, runner.run_all(plan, list(ref_cases.values()), folder, 1, jobs, say)))
+    ref = report.reference(plan, ref_rows)
+    (folder / "reference.json").write_text(json.dumps({**ref, "runs": ref_rows}, indent=1, default=str))
+    rows = runner.run_all(plan, plan.cases(quick), folder, repeat, jobs, say)
+    report.add_errors(rows, ref["value"])
+    claims = report.claim_rows(plan, rows)
+    report.write_csv(folder / "runs.csv", rows)
+    report.chart(plan, rows, ref, folder / "pareto.png")
+    (folder / "summary.md").write_text(report.markdown(plan, rows, ref, claims))
+    echo(f"{scene}: {len(rows)} runs (+{len(ref_rows)} for the reference) in "
+         f"{time.perf_counter() - t0:.0f} s; {folder / 'pareto.png'}, {folder / 'summary.md'}")
+    return rows, ref, claims
+
+
+def main(scenes: list[str], out: pathlib.Path, repeat: int, jobs: int, quick: bool) -> int:
+    from . import report
+    claims, parts = [], []
+    for s in scenes:
+        _, _, c = study(s, out, repeat, jobs, quick)
+        claims += c
+        parts.append((out / s / "summary.md").read_text())
+    report.write_csv(out / "claim.csv", claims)
+    (out / "study.md").write_text("# Speed against accuracy\n\n" + "\n".join(parts))
+    return 0

@@ -1,0 +1,110 @@
+"""Run the study's cases as separate processes (`comove run`), a few at a time, and read what they left.
+
+A case's cost is the CPU time of its whole process (start-up, imports, mesh, compilation, the run and
+its output; the C compiler counts, as a child it waited for), taken from the kernel's accounting of
+the finished child (os.wait4), and its Newton iterations, failed attempts included. Each case runs
+``repeat`` times; the CPU time is their median and the spread their range. The first run of a kind
+of model compiles its forms, later ones find them in the JIT cache: the spread shows it.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import pathlib
+import shutil
+import statistics
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+from .plan import Case, ScenePlan
+
+
+def _launch(scene: str, case: Case, folder: pathlib.Path) -> tuple[float, int]:
+    """One process; (its CPU seconds with its children, its exit code)."""
+    cmd = [sys.executable, "-m", "comove_dolfinx.cli", "run", scene, "--out", str(folder), "--overwrite",
+           "--no-progress"] + [a for s in case.sets for a in ("--set", s)]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    with open(folder.parent / f"{folder.name}.log", "w") as log:
+        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+        _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return usage.ru_utime + usage.ru_stime, proc.returncode
+
+
+def _read(folder: pathlib.Path) -> tuple[dict, list[dict]]:
+    try:
+        info = json.loads((folder / "run.json").read_text())
+    except (OSError, ValueError):
+        info = {}
+    try:
+        with open(folder / "history.csv") as fh:
+            rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+    except (OSError, ValueError):
+        rows = []
+    return info, rows
+
+
+def quantity(plan: ScenePlan, rows: list[dict]) -> float:
+    """q of a run: the column at the plan's load level (linear between increments), nan where the run
+    did not get there; or in the last row (the caller keeps it for completed runs only)."""
+    if not rows:
+        return float("nan")
+    if plan.at is None:
+        return plan.sign * rows[-1][plan.column]
+    x = [0.0] + [r["load"] for r in rows]
+    y = [0.0] + [r[plan.column] for r in rows]
+    for k in range(1, len(x)):
+        if x[k] >= plan.at - 1e-12:
+            w = (plan.at - x[k - 1]) / (x[k] - x[k - 1])
+            return plan.sign * (y[k - 1] + w * (y[k] - y[k - 1]))
+    return float("nan")
+
+
+def run_case(plan: ScenePlan, case: Case, out: pathlib.Path, repeat: int) -> dict:
+    """Run ``case`` ``repeat`` times into out/runs/<tag>; the row of the study's table."""
+    folder = out / "runs" / case.tag
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    cpus, code = [], 0
+    for _ in range(repeat):
+        cpu, code = _launch(plan.name, case, folder)
+        cpus.append(cpu)
+    info, rows = _read(folder)
+    status = info.get("status", "crashed" if code else "unknown")
+    its = info.get("newton_its", [])
+    complete = status == "completed"
+    q = quantity(plan, rows) if complete or plan.at is not None else float("nan")
+    increments = len(its)
+    cut = max(increments - _nominal(case, plan), 0)          # increments added by cut-backs
+    return {"family": case.family, "x": case.x, "settings": " ".join(case.sets), "status": status,
+            "message": info.get("message", f"exit code {code}"), "increments": increments,
+            "extra_increments": cut, "q": q,
+            "newton_its": sum(its) + info.get("failed_its", 0), "failed_its": info.get("failed_its", 0),
+            "dofs": info.get("dofs", 0), "cpu_s": statistics.median(cpus),
+            "cpu_spread_s": max(cpus) - min(cpus), "repeats": repeat,
+            "compile_cpu_s": (info.get("process") or {}).get("compiler_cpu_s", 0.0),
+            "max_penetration": info.get("max_penetration", float("nan"))}
+
+
+def _nominal(case: Case, plan: ScenePlan) -> int:
+    for s in case.sets:
+        if s.startswith("n_steps="):
+            return int(s.split("=", 1)[1])
+    return plan.n0
+
+
+def run_all(plan: ScenePlan, cases: list[Case], out: pathlib.Path, repeat: int, jobs: int,
+            progress=None) -> list[dict]:
+    """Every case, ``jobs`` processes at a time; the rows in the order of ``cases``."""
+    def one(case):
+        row = run_case(plan, case, out, repeat)
+        if progress is not None:
+            progress(case, row)
+        return row
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        return list(pool.map(one, cases))
+
+
+def clean(out: pathlib.Path) -> None:
+    shutil.rmtree(out / "runs", ignore_errors=True)

@@ -1,0 +1,97 @@
+"""The study's arithmetic (Richardson, Pareto front, the claim table, q read off a history) on sequences
+with known answers; material constants that do not enter the generated code; the timing of the whole
+process."""
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import comove_dolfinx as cm
+from comove_dolfinx.study import report
+from comove_dolfinx.study.plan import PLANS, ScenePlan
+from comove_dolfinx.study.runner import quantity
+
+
+def test_richardson_recovers_the_limit_and_order():
+    for p in (1.0, 2.0, 3.0):
+        q = [2.0 + 0.3 * h ** p for h in (0.4, 0.2, 0.1)]
+        ext, err, order = report.richardson(q)
+        assert ext == pytest.approx(2.0, abs=1e-12) and order == pytest.approx(p, rel=1e-10)
+        assert err == pytest.approx(0.3 * 0.1 ** p, rel=1e-9)
+    # differences that grow or change sign: no extrapolation, the last change is the error
+    assert report.richardson([1.0, 1.1, 1.0]) == (1.0, pytest.approx(0.1), pytest.approx(math.nan, nan_ok=True))
+    assert report.richardson([1.0, 1.01, 1.1])[:2] == (1.1, pytest.approx(0.09))
+
+
+def test_pareto_front_keeps_the_undominated_runs():
+    rows = [{"cpu_s": c, "error_percent": e, "id": i}
+            for i, (c, e) in enumerate([(1.0, 5.0), (2.0, 1.0), (1.5, 6.0), (3.0, 1.0), (4.0, 0.1),
+                                        (0.5, math.nan)])]
+    assert [r["id"] for r in report.pareto(rows)] == [0, 1, 4]
+
+
+def test_quantity_is_interpolated_at_the_load_level_or_read_at_the_end():
+    rows = [{"load": 0.5, "force": 10.0}, {"load": 1.5, "force": 30.0}]
+    ring = ScenePlan("x", "force", 1.0, "P")
+    assert quantity(ring, rows) == pytest.approx(20.0)
+    assert math.isnan(quantity(ScenePlan("x", "force", 2.0, "P"), rows))
+    assert quantity(ScenePlan("x", "force", None, "P", sign=-1.0), rows) == -30.0
+
+
+def test_claim_table_finds_the_fewest_increments():
+    """q(n) = 1 + 0.9/n: within 1 % from n = 100, 0.1 % from n = 1000 against the reference 1; the same against
+    the update's own limit, which Richardson recovers exactly from the three finest runs."""
+    plan = ScenePlan("s", "q", None, "q", updates=("sr",))
+    rows = [{"family": "update sr", "x": float(n), "q": 1.0 + 0.9 / n, "status": "completed",
+             "cpu_s": 0.01 * n} for n in (10, 100, 400, 1000, 2000, 4000)]
+    report.add_errors(rows, 1.0)
+    (c,) = report.claim_rows(plan, rows)
+    assert c["own_limit"] == pytest.approx(1.0, rel=1e-12)
+    assert (c["n_reference_1%"], c["n_reference_0.1%"]) == (100, 1000)
+    assert (c["n_own_1%"], c["n_own_0.1%"]) == (100, 1000)
+    assert c["cpu_reference_1%"] == pytest.approx(1.0)
+
+
+def test_every_scene_plan_has_its_reference_runs():
+    for plan in PLANS.values():
+        refs = plan.reference_cases()
+        assert len(refs) == 6 and all(c.tag for c in refs.values())
+        tags = [c.tag for c in plan.cases()]
+        assert len(tags) == len(set(tags))                 # no two runs share a folder
+
+
+def _block(E, mu, tmp_path):
+    md = cm.rectangle(1.0, 0.25, 0.125, order=1, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
+    body = cm.Body(md, "plane_strain", cm.Elastic(E=E, nu=0.3), degree=1)
+    floor = cm.Contact("bottom", cm.Plane((0.0, -0.5), (0.0, 1.0)), mu=mu)
+    tip = cm.NodeDisplacement("tip", (1.0, 0.25))
+    job = cm.Job(body, [cm.Fixed("left"), cm.Traction("right", (0.0, -1e-4)), floor], [cm.Step(1)], [tip])
+    return job, job.run()
+
+
+def test_material_constants_do_not_enter_the_compiled_code(tmp_path):
+    """Two models that differ in E and in the friction coefficient have the same form signature (so
+    they share the compiled code and the JIT cache), and still give the answers of their own
+    constants: far from the obstacle, at a load that strains the block by 1e-5, the tip moves half
+    as much for twice the modulus (to the geometric nonlinearity, ~1e-5)."""
+    job1, r1 = _block(1000.0, 0.1, tmp_path)
+    job2, r2 = _block(2000.0, 0.3, tmp_path)
+    assert r1.completed and r2.completed
+    assert job1.model.residual_ufl.signature() == job2.model.residual_ufl.signature()
+    ratio = r1["tip_uy"][-1] / r2["tip_uy"][-1]
+    assert r1["tip_uy"][-1] < 0 and ratio == pytest.approx(2.0, rel=1e-4)
+
+
+def test_timing_accounts_for_the_whole_process(tmp_path):
+    """The parts of the timing add up to the run and what came before it, within the process's life."""
+    _, res = _block(1000.0, 0.0, tmp_path)
+    parts = res.timing
+    before = parts["before the run (start-up, imports, mesh)"]
+    assert 0.0 < before < res.process["wall_s"]
+    run_parts = sum(v for k, v in parts.items() if not k.startswith("before"))
+    assert run_parts == pytest.approx(res.wall_s, rel=1e-9)
+    assert before + res.wall_s <= res.process["wall_s"] + 0.02      # /proc's clock ticks: 10 ms
+    assert res.process["cpu_s"] > 0.0
+    assert "process: wall" in res.timing_report
+    assert np.isfinite(res.process["compiler_cpu_s"])
