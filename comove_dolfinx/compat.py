@@ -185,15 +185,17 @@ def create_vector(L) -> PETSc.Vec:
 
 
 def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
-                    alpha: float = -1.0, add=None) -> None:
+                    alpha: float = -1.0, add=None, lift: bool = True) -> None:
     """Zero b and assemble the linear form L; with a bilinear form ``a``, lift the Dirichlet values
     of ``bcs`` relative to x and set the constraint rows to alpha (g - x), as Newton needs. Ghost
     contributions are summed once, after the lifting, so the owned entries are complete. ``add``:
-    (owned dofs, values) added to b before the constraint rows are set (nodal forces)."""
+    (owned dofs, values) added to b before the constraint rows are set (nodal forces). ``lift``
+    False skips the lifting, which adds exactly nothing when x meets the constraints (g - x = 0,
+    see :func:`constraint_gap`) and costs a pass of a's kernel and the packing of its coefficients."""
     with b.localForm() as loc:
         loc.set(0.0)
     fem_petsc.assemble_vector(b, L)
-    if a is not None:
+    if a is not None and lift:
         if _OLD:
             fem_petsc.apply_lifting(b, [a], bcs=[list(bcs)], x0=[x], scale=alpha)
         else:
@@ -204,6 +206,11 @@ def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
             loc.array[add[0]] += add[1]
     if a is None:
         return
+    _set_bc(b, bcs, x, alpha)
+
+
+def _set_bc(b: PETSc.Vec, bcs, x: PETSc.Vec, alpha: float) -> None:
+    """The owned constraint rows of b set to alpha (g - x)."""
     if _OLD:
         fem_petsc.set_bc(b, list(bcs), x, alpha)
     elif VERSION >= (0, 10):
@@ -211,6 +218,15 @@ def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
             bc.set(b.array_w, x.array_r, alpha)
     else:
         fem_petsc.set_bc(b, list(bcs), x, alpha)
+
+
+def constraint_gap(work: PETSc.Vec, bcs, x: PETSc.Vec) -> float:
+    """max |g - x| over the Dirichlet dofs of ``bcs`` on every rank (collective); ``work``, a vector
+    of x's layout, is overwritten."""
+    with work.localForm() as loc:
+        loc.set(0.0)
+    _set_bc(work, bcs, x, 1.0)
+    return work.norm(PETSc.NormType.NORM_INFINITY)
 
 
 def assemble_matrix(A: PETSc.Mat, a, bcs=()) -> None:

@@ -71,7 +71,7 @@ PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": s
           "reaction": {"boundary": str, "name": str},
           "max_plastic_strain": {}}
 NEWTON = {"rtol": float, "atol": float, "stol": float, "max_it": int, "divergence": float, "backtracks": int,
-          "free_its": int, "line_search": str, "energy_eta": float, "scale": str}
+          "free_its": int, "line_search": str, "energy_eta": float, "scale": str, "petsc_options": dict}
 SECTIONS = {"mesh", "body", "items", "steps", "newton", "probes"}
 
 

@@ -24,16 +24,23 @@ class LineSearches:
         """u = u0 + alpha du and its ||R||; (None, error) if the iterate is inadmissible."""
         m = self.model
         m.u.x.array[:] = u0 + alpha * m.du.x.array
+        self._last_trial = None
         try:
-            return self.residual(), None
+            r = self.residual()
         except (InvertedElement, ReturnMapFailure) as e:
             return None, e
+        self._last_trial = (alpha, r)
+        return r, None
 
     def _settle(self, u0: np.ndarray, alpha: float | None, r_old: float, err):
-        """End a search on the chosen step (or back at u0 when no trial was admissible)."""
+        """End a search on the chosen step (or back at u0 when no trial was admissible); the model
+        already holds the chosen step when it was the last trial."""
         if alpha is None:
             self.model.u.x.array[:] = u0
             return r_old, 0.0, err
+        last = getattr(self, "_last_trial", None)
+        if last is not None and last[0] == alpha:
+            return last[1], alpha, None
         r, _ = self._trial(u0, alpha)
         return r, alpha, None
 

@@ -3,6 +3,8 @@
 Newton works on the total displacement u. Each iteration evaluates the stress update (and return
 map) at the quadrature points, assembles the residual and the exact Jacobian and solves with MUMPS;
 the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic analysis is done once.
+The linear solver reads PETSc options under the prefix ``comove_`` (linear.py): another direct
+solver or ordering, or an iterative solver (GMRES with algebraic multigrid).
 
 Convergence: ||R|| <= rtol * R_scale + atol, with R_scale (``scale``) either the largest initial
 residual norm of the increments so far ("initial", a force scale of the run, which depends on the
@@ -21,7 +23,7 @@ import logging
 import time
 from collections import defaultdict
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from dolfinx import fem
@@ -31,24 +33,27 @@ from petsc4py import PETSc
 from .. import compat
 from ..mechanics.model import InvertedElement, Model, ReturnMapFailure
 from ..parallel import first_failure
+from . import linear
 from .linesearch import LineSearches
 
 log = logging.getLogger("comove")
 
 
 class Timer:
-    """Wall-time accumulated per category (assembly, solve, stress update, output, ...)."""
+    """Time accumulated per category (assembly, solve, stress update, output, ...): wall time, or
+    with ``clock=time.process_time`` the process's CPU time (the cost benchmarks)."""
 
-    def __init__(self):
+    def __init__(self, clock=time.perf_counter):
         self.totals: dict[str, float] = defaultdict(float)
+        self.clock = clock
 
     @contextmanager
     def __call__(self, name: str):
-        t0 = time.perf_counter()
+        t0 = self.clock()
         try:
             yield
         finally:
-            self.totals[name] += time.perf_counter() - t0
+            self.totals[name] += self.clock() - t0
 
     def report(self) -> str:
         total = sum(self.totals.values())
@@ -72,10 +77,13 @@ class NewtonSettings:
     energy_eta: float = 0.8        # energy search: accept a step once |du.R| <= eta |du.R(u)|
     scale: str = "initial"         # what rtol is relative to: "initial", the largest initial
                                    # residual of the run; "force", ||F_int|| of the iterate
+    petsc_options: dict = field(default_factory=dict)   # the linear solver's PETSc options, keys
+                                   # without the prefix comove_: {"pc_factor_mat_solver_type": "petsc"}
 
 
 class Newton(LineSearches):
-    """Newton-Raphson on ``model.u`` with an exact Jacobian and a direct solver (MUMPS)."""
+    """Newton-Raphson on ``model.u`` with an exact Jacobian and a direct solver (MUMPS unless the
+    PETSc options under the prefix comove_ choose another solver)."""
 
     def __init__(self, model: Model, settings: NewtonSettings | None = None,
                  timer: Timer | None = None):
@@ -84,12 +92,10 @@ class Newton(LineSearches):
         self.timer = timer or Timer()
         self.A = compat.create_matrix(model.jacobian_form)
         self.b = compat.create_vector(model.residual_form)
-        self.ksp = PETSc.KSP().create(model.comm)
-        self.ksp.setOperators(self.A)
-        self.ksp.setType("preonly")
-        pc = self.ksp.getPC()
-        pc.setType("lu")
-        pc.setFactorSolverType("mumps")
+        self.petsc_options = dict(self.settings.petsc_options or {})
+        self.ksp = linear.make_ksp(model.comm, self.A, self.petsc_options)
+        if not linear.is_direct(self.ksp):       # algebraic multigrid needs the rigid-body modes
+            self.A.setNearNullSpace(linear.rigid_body_modes(model.V, self.A))
         ls = self.settings.line_search
         if ls is None:
             ls = any(item.kind == "contact" for item in model.items)
@@ -100,6 +106,7 @@ class Newton(LineSearches):
             raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
         self._b_old = self.b.duplicate()
         self._f = self.b.duplicate()
+        self._w = self.b.duplicate()          # scratch: the constraint gap g - u
         self.factorised = False            # the KSP holds the LU factors of a tangent
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
@@ -110,8 +117,10 @@ class Newton(LineSearches):
         with self.timer("stress update"):
             m.evaluate_stress()
         with self.timer("assembly"):
-            compat.assemble_vector(b, m.residual_form, m.jacobian_form, m.bcs, compat.petsc_vec(m.u),
-                                   add=m.nodal_loads())
+            x = compat.petsc_vec(m.u)
+            lift = compat.constraint_gap(self._w, m.bcs, x) > 0.0     # else the lifting adds 0
+            compat.assemble_vector(b, m.residual_form, m.jacobian_form, m.bcs, x,
+                                   add=m.nodal_loads(), lift=lift)
             b.scale(-1.0)
         return b.norm()
 
@@ -120,7 +129,8 @@ class Newton(LineSearches):
         raised on one rank's part of the solve becomes every rank's failure)."""
         err = None
         try:
-            self.ksp.solve(self.b, compat.petsc_vec(self.model.du))
+            with linear.pushed(self.petsc_options):
+                self.ksp.solve(self.b, compat.petsc_vec(self.model.du))
         except PETSc.Error as e:
             err = e
         failure = first_failure(self.model.comm, err)
@@ -145,7 +155,7 @@ class Newton(LineSearches):
         """The residual test; with scale "force" against ||F_int|| of the current iterate."""
         s = self.settings
         if s.scale == "force":
-            with self.timer("assembly"):
+            with self.timer("force scale"):
                 self.residual_scale = self.force_scale()
         return rnorm <= s.rtol * self.residual_scale + s.atol
 
@@ -162,7 +172,7 @@ class Newton(LineSearches):
         for it in range(1, s.max_it + 1):
             if self._converged(rnorm):
                 return True, it - 1, "converged"
-            with self.timer("assembly"):
+            with self.timer("jacobian"):
                 compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
             self.u_factorised = m.u.x.array.copy()        # a checkpoint rebuilds this tangent
             with self.timer("solve"):
@@ -211,7 +221,8 @@ class Newton(LineSearches):
                 rhs.scale(1.0 / eps)
                 err = None
                 try:
-                    self.ksp.solve(rhs, compat.petsc_vec(rate))
+                    with linear.pushed(self.petsc_options):
+                        self.ksp.solve(rhs, compat.petsc_vec(rate))
                 except PETSc.Error as e:
                     err = e
                 if first_failure(m.comm, err) is not None or self.ksp.getConvergedReason() < 0:

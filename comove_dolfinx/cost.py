@@ -1,0 +1,388 @@
+"""What a Newton iteration costs, against what it cannot cost less than; solvers; ranks. Writes CSV
+files and charts, never asserts (docs/performance.md).
+
+    python -m comove_dolfinx.cost floor   --out results/cost   # ring: iteration vs linear-elastic floor
+    python -m comove_dolfinx.cost solvers --out results/cost   # ring: direct solvers, orderings, GAMG
+    mpirun -n 2 python -m comove_dolfinx.cost scale --out results/cost   # ring, plate: 1 or 2 ranks
+
+floor: per ring size, the CPU time of one Newton iteration of the real run (the scene's first
+``--increments`` nominal increments, predictor, line searches, cut-backs and failed iterations
+included: run time / all iterations) against the floor on the same mesh and degree: assembling a
+linear-elastic stiffness matrix and residual (with the same lifting of the Dirichlet rows) and one
+MUMPS factorisation and solve (symbolic analysis done once, as in Newton). Also the run's residual
+evaluations per iteration and its Timer split; a cProfile listing of the largest size.
+solvers: per ring size and solver configuration (PETSc options under comove_), the CPU time of one
+factorisation and solve of the real tangent, and of the short run.
+scale: per scene, size and number of ranks (run once serial, once under mpirun, rows appended),
+wall and CPU time (summed over ranks) per Newton iteration of a short run, MUMPS against GAMG.
+
+CPU time is ``time.process_time`` (the process's, not the machine's); every figure is the median of
+``--repeats`` runs with its spread (max - min) beside it. Other processes on the machine lengthen
+wall times, and CPU times much less.
+"""
+from __future__ import annotations
+
+import argparse
+import cProfile
+import csv
+import dataclasses
+import io
+import logging
+import pathlib
+import pstats
+import time
+
+import numpy as np
+from mpi4py import MPI
+
+from . import compat
+from .mechanics.model import Model
+from .presets import get_scene
+from .solver import IncrementalSolver, Timer
+from .solver.linear import make_ksp, pushed
+from .solver.newton import Newton
+
+COMM = MPI.COMM_WORLD
+RING_SIZES = (0.22, 0.115, 0.058, 0.0365)          # about 1.4k, 5k, 20k and 50k dofs
+ITERATIVE = {"ksp_type": "gmres", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 1000,
+             "ksp_gmres_restart": 100}
+SOLVERS = {
+    "mumps_auto": {},
+    "mumps_amd": {"mat_mumps_icntl_7": 0},
+    "mumps_amf": {"mat_mumps_icntl_7": 2},
+    "mumps_scotch": {"mat_mumps_icntl_7": 3},
+    "mumps_pord": {"mat_mumps_icntl_7": 4},
+    "mumps_metis": {"mat_mumps_icntl_7": 5},
+    "mumps_qamd": {"mat_mumps_icntl_7": 6},
+    "petsc_nd": {"pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "nd"},
+    "umfpack": {"pc_factor_mat_solver_type": "umfpack"},
+    "superlu_dist": {"pc_factor_mat_solver_type": "superlu_dist"},
+    "gmres_gamg": ITERATIVE,
+    "gmres_gamg_loose": {**ITERATIVE, "ksp_rtol": 1e-6},     # inexact Newton
+}
+SCALE = {"ring": (0.0365, 0.0175), "plate": (0.059, 0.029)}     # about 50k and 190k dofs
+
+
+# ------------------------------------------------------------------------------------------------
+# helpers
+# ------------------------------------------------------------------------------------------------
+def _cpu() -> float:
+    """CPU seconds of this process, summed over the ranks by the caller."""
+    return time.process_time()
+
+
+def _stats(values) -> tuple[float, float]:
+    """(median, max - min)."""
+    v = np.asarray(values, dtype=float)
+    return float(np.median(v)), float(v.max() - v.min())
+
+
+def _write_csv(path: pathlib.Path, rows: list[dict], append: bool = False) -> None:
+    if COMM.rank != 0 or not rows:
+        return
+    new = not (append and path.exists())
+    with open(path, "a" if not new else "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        if new:
+            w.writeheader()
+        w.writerows(rows)
+
+
+def _read_csv(path: pathlib.Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def build(name: str, size: float) -> tuple:
+    """(scene, finalized model) of a scene at a mesh size."""
+    scene = get_scene(name, [f"size={size}"])
+    body, items, _ = scene.build(scene.mesh_data(COMM))
+    model = Model(body, items)
+    model.finalize()
+    return scene, model
+
+
+def short_run(name: str, size: float, increments: int, options: dict | None = None,
+              count: bool = False) -> dict:
+    """The scene's first ``increments`` nominal increments (its own predictor and Newton settings,
+    the linear solver's ``options``): CPU and wall time of the run (max over ranks for wall, sum
+    for CPU), iterations (failed ones included), residual evaluations, the Timer's split."""
+    scene, model = build(name, size)
+    settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}))
+    steps = dataclasses.replace(scene.steps()[0].settings(), n_steps=increments,
+                                t_end=increments / scene.n_steps)
+    timer = Timer(time.process_time)
+    newton = Newton(model, settings, timer)
+    calls = {"residual": 0}
+    if count:
+        residual = newton.residual
+
+        def counted():
+            calls["residual"] += 1
+            return residual()
+        newton.residual = counted
+    solver = IncrementalSolver(model, steps, newton)
+    COMM.barrier()
+    w0, c0 = time.perf_counter(), _cpu()
+    res = solver.run()
+    cpu, wall = _cpu() - c0, time.perf_counter() - w0
+    its = sum(i.newton_its + i.failed_its for i in res.increments)
+    return {"dofs": model.num_dofs(), "iterations": its, "increments": len(res.increments),
+            "completed_to": res.increments[-1].load if res.increments else 0.0,
+            "cpu": COMM.allreduce(cpu, op=MPI.SUM), "wall": COMM.allreduce(wall, op=MPI.MAX),
+            "residuals": calls["residual"], "timer": dict(timer.totals), "model": model,
+            "newton": newton}
+
+
+def elastic_floor(model: Model, iterations: int = 5) -> tuple[float, list[float]]:
+    """CPU seconds of one 'iteration' of linear elasticity on the model's mesh, space, quadrature
+    and supports: stiffness matrix, residual (with the lifting Newton does) and a MUMPS
+    factorisation and solve; the first (symbolic analysis) not counted, as Newton does it once.
+    Also the split (matrix, vector, factorisation + solve)."""
+    import ufl
+    from dolfinx import fem
+    u, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
+    w = fem.Function(model.V)
+    E, nu = model.elastic.E, model.elastic.nu
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+    def sigma(d):
+        eps = ufl.sym(ufl.grad(d))
+        return lam * ufl.tr(eps) * ufl.Identity(2) + 2 * mu * eps
+    a = compat.form(ufl.inner(sigma(u), ufl.sym(ufl.grad(v))) * model.rule.dx)
+    L = compat.form(ufl.inner(sigma(w), ufl.sym(ufl.grad(v))) * model.rule.dx)
+    A, b = compat.create_matrix(a), compat.create_vector(L)
+    x = b.duplicate()
+    ksp = make_ksp(model.comm, A, {})
+    rng = np.random.default_rng(0)
+    times = []
+    for k in range(iterations + 1):
+        w.x.array[:] = 1e-3 * rng.standard_normal(w.x.array.size)
+        model.comm.barrier()
+        c0 = _cpu()
+        compat.assemble_matrix(A, a, model.bcs)
+        c1 = _cpu()
+        compat.assemble_vector(b, L, a, model.bcs, compat.petsc_vec(w))
+        c2 = _cpu()
+        with pushed({}):
+            ksp.solve(b, x)
+        if k:
+            times.append((c1 - c0, c2 - c1, _cpu() - c2))
+    for obj in (ksp, A, b, x):
+        obj.destroy()
+    split = [model.comm.allreduce(float(t), op=MPI.SUM) for t in np.mean(times, axis=0)]
+    return sum(split), split
+
+
+def factor_solve(newton: Newton, options: dict, repeats: int) -> list[float]:
+    """CPU seconds of one factorisation and solve of the Newton's current tangent with another
+    linear solver (symbolic set-up at a first, untimed solve); one per repeat."""
+    m = newton.model
+    ksp = make_ksp(m.comm, newton.A, options)
+    x = newton.b.duplicate()
+    out = []
+    for k in range(repeats + 1):
+        compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs)   # a new state: a new factorisation
+        m.comm.barrier()
+        c0 = _cpu()
+        with pushed(options):
+            ksp.solve(newton.b, x)
+        reason = ksp.getConvergedReason()
+        if k:
+            out.append(_cpu() - c0 if reason > 0 else np.nan)
+    ksp.destroy()
+    x.destroy()
+    return [m.comm.allreduce(t, op=MPI.SUM) for t in out]
+
+
+def _chart(path, series: dict, xlabel: str, ylabel: str, title: str, logy=True) -> None:
+    """One line per series: {label: (x, y, spread)}."""
+    if COMM.rank != 0:
+        return
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for label, (x, y, err) in series.items():
+        ax.errorbar(x, y, yerr=np.asarray(err) / 2, marker="o", capsize=3, label=label)
+    ax.set_xscale("log")
+    if logy:
+        ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _say(text: str) -> None:
+    if COMM.rank == 0:
+        print(text, flush=True)
+
+
+# ------------------------------------------------------------------------------------------------
+# the studies
+# ------------------------------------------------------------------------------------------------
+def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 4) -> list[dict]:
+    rows = []
+    for size in sizes:
+        runs = [short_run("ring", size, increments, count=True) for _ in range(repeats)]
+        per_it = [r["cpu"] / max(r["iterations"], 1) for r in runs]
+        floors = [elastic_floor(runs[-1]["model"]) for _ in range(repeats)]
+        fl = [f[0] for f in floors]
+        split = [float(np.median([f[1][k] for f in floors])) for k in range(3)]
+        r = runs[-1]
+        its = max(r["iterations"], 1)
+        t = r["timer"]
+        row = {"size": size, "dofs": r["dofs"], "iterations": r["iterations"],
+               "increments": r["increments"], "residuals_per_it": round(r["residuals"] / its, 2)}
+        row["iteration_cpu_s"], row["iteration_spread_s"] = _stats(per_it)
+        row["floor_cpu_s"], row["floor_spread_s"] = _stats(fl)
+        row["ratio"] = row["iteration_cpu_s"] / row["floor_cpu_s"]
+        for k in ("solve", "jacobian", "assembly", "stress update", "force scale", "predictor"):
+            row[f"{k.replace(' ', '_')}_s_per_it"] = t.get(k, 0.0) / its       # CPU, last run
+        row["other_s_per_it"] = row["iteration_cpu_s"] - sum(
+            t.get(k, 0.0) for k in ("solve", "jacobian", "assembly", "stress update", "force scale")) / its
+        for k, v in zip(("floor_matrix_s", "floor_vector_s", "floor_solve_s"), split):
+            row[k] = v
+        rows.append(row)
+        _say(f"ring size {size}: {row['dofs']} dofs, {row['iterations']} its, iteration "
+             f"{row['iteration_cpu_s'] * 1e3:.1f} ms (+-{row['iteration_spread_s'] * 5e2:.1f}), floor "
+             f"{row['floor_cpu_s'] * 1e3:.1f} ms, ratio {row['ratio']:.2f}, "
+             f"{row['residuals_per_it']} residuals/it")
+    _write_csv(out / "floor.csv", rows)
+    dofs = [r["dofs"] for r in rows]
+    _chart(out / "floor.png", {
+        "Newton iteration (ring)": (dofs, [r["iteration_cpu_s"] for r in rows],
+                                    [r["iteration_spread_s"] for r in rows]),
+        "floor: elastic K, R, MUMPS": (dofs, [r["floor_cpu_s"] for r in rows],
+                                       [r["floor_spread_s"] for r in rows])},
+        "dofs", "CPU s per iteration", "ring: one Newton iteration against the linear-elastic floor")
+    if sizes:
+        _profile(out, sizes[-1], increments)
+    return rows
+
+
+def _profile(out: pathlib.Path, size: float, increments: int) -> None:
+    """cProfile of the short ring run at one size, the 30 costliest functions (own time)."""
+    prof = cProfile.Profile()
+    prof.enable()
+    short_run("ring", size, increments)
+    prof.disable()
+    if COMM.rank == 0:
+        text = io.StringIO()
+        pstats.Stats(prof, stream=text).sort_stats("tottime").print_stats(30)
+        (out / f"profile_ring_{size}.txt").write_text(text.getvalue())
+
+
+def solvers(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 2,
+            names=None, run_names=("mumps_auto", "mumps_metis", "mumps_amd", "petsc_nd",
+                                   "gmres_gamg")) -> list[dict]:
+    """Factorisation + solve of the ring's tangent after ``increments`` increments, every solver;
+    the short run itself with the solvers of ``run_names``."""
+    names = list(names or SOLVERS)
+    rows = []
+    for size in sizes:
+        base = short_run("ring", size, increments)
+        for name in names:
+            opts = SOLVERS[name]
+            if COMM.size > 1 and name in ("petsc_nd", "umfpack"):
+                continue                                     # sequential factorisations
+            try:
+                fs = factor_solve(base["newton"], opts, repeats)
+            except Exception as err:                         # noqa: BLE001 - not in this PETSc
+                _say(f"  {name}: not available ({str(err).splitlines()[0]})")
+                continue
+            row = {"size": size, "dofs": base["dofs"], "solver": name}
+            row["factor_solve_cpu_s"], row["factor_solve_spread_s"] = _stats(fs)
+            if name in run_names:
+                runs = [short_run("ring", size, increments, opts) for _ in range(repeats)]
+                row["run_cpu_s"], row["run_spread_s"] = _stats([r["cpu"] for r in runs])
+                row["iterations"] = runs[-1]["iterations"]
+            else:
+                row.update(run_cpu_s=np.nan, run_spread_s=np.nan, iterations=np.nan)
+            rows.append(row)
+            _say(f"ring {row['dofs']} dofs, {name}: factor+solve {row['factor_solve_cpu_s'] * 1e3:.1f} ms"
+                 f" (+-{row['factor_solve_spread_s'] * 5e2:.1f}), run {row['run_cpu_s']:.2f} s")
+    _write_csv(out / "solvers.csv", rows)
+    series = {}
+    for name in names:
+        sel = [r for r in rows if r["solver"] == name]
+        if sel:
+            series[name] = ([r["dofs"] for r in sel], [r["factor_solve_cpu_s"] for r in sel],
+                            [r["factor_solve_spread_s"] for r in sel])
+    _chart(out / "solvers.png", series, "dofs", "CPU s per factorisation + solve",
+           "ring tangent: direct solvers and orderings, GMRES + GAMG")
+    return rows
+
+
+def scale(out: pathlib.Path, scenes=SCALE, repeats: int = 3, increments: int = 1,
+          solver_names=("mumps_auto", "gmres_gamg")) -> list[dict]:
+    """Short runs of each scene and size on the ranks this was started with; rows appended to
+    scale.csv (run once serial, once under mpirun), the chart drawn from every row there."""
+    rows = []
+    for name, sizes in scenes.items():
+        for size in sizes:
+            for solver in solver_names:
+                runs = [short_run(name, size, increments, SOLVERS[solver]) for _ in range(repeats)]
+                its = [max(r["iterations"], 1) for r in runs]
+                row = {"scene": name, "size": size, "dofs": runs[-1]["dofs"], "ranks": COMM.size,
+                       "solver": solver, "iterations": runs[-1]["iterations"],
+                       "completed_to": runs[-1]["completed_to"]}
+                wall = [r["wall"] / i for r, i in zip(runs, its)]
+                cpu = [r["cpu"] / i for r, i in zip(runs, its)]
+                row["wall_per_it_s"], row["wall_spread_s"] = _stats(wall)
+                row["cpu_per_it_s"], row["cpu_spread_s"] = _stats(cpu)
+                rows.append(row)
+                _say(f"{name} {row['dofs']} dofs, {COMM.size} rank(s), {solver}: {row['iterations']} its, "
+                     f"wall {row['wall_per_it_s']:.3f} s/it (+-{row['wall_spread_s'] / 2:.3f}), "
+                     f"CPU {row['cpu_per_it_s']:.3f} s/it")
+    _write_csv(out / "scale.csv", rows, append=True)
+    if COMM.rank == 0:
+        every = _read_csv(out / "scale.csv")
+        series = {}
+        for r in every:
+            key = f"{r['scene']} {r['solver']} {r['ranks']} rank(s)"
+            x, y, e = series.setdefault(key, ([], [], []))
+            x.append(int(r["dofs"]))
+            y.append(float(r["wall_per_it_s"]))
+            e.append(float(r["wall_spread_s"]))
+        _chart(out / "scale.png", series, "dofs", "wall s per Newton iteration",
+               "ring and plate: 1 and 2 ranks, MUMPS and GMRES + GAMG")
+    return rows
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(prog="python -m comove_dolfinx.cost", description=__doc__.split("\n")[0])
+    p.add_argument("study", choices=("floor", "solvers", "scale"))
+    p.add_argument("--out", default="results/cost")
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--increments", type=int, default=None, help="nominal increments of each short run")
+    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers)")
+    p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
+    p.add_argument("--scenes", default="ring,plate", help="comma-separated scenes (scale)")
+    a = p.parse_args(argv)
+    logging.disable(logging.INFO)
+    out = pathlib.Path(a.out)
+    if COMM.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    COMM.barrier()
+    kw = {"repeats": a.repeats}
+    if a.increments:
+        kw["increments"] = a.increments
+    if a.sizes and a.study != "scale":
+        kw["sizes"] = tuple(float(s) for s in a.sizes.split(","))
+    if a.study == "floor":
+        floor(out, **kw)
+    elif a.study == "solvers":
+        solvers(out, names=a.solvers.split(",") if a.solvers else None, **kw)
+    else:
+        names = tuple(a.solvers.split(",")) if a.solvers else ("mumps_auto", "gmres_gamg")
+        scale(out, scenes={k: SCALE[k] for k in a.scenes.split(",")}, solver_names=names, **kw)
+
+
+if __name__ == "__main__":
+    main()

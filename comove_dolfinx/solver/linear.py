@@ -1,0 +1,101 @@
+"""The linear solver of Newton: a PETSc KSP under the options prefix ``comove_``.
+
+Defaults: preonly + LU + MUMPS (a direct solve; the symbolic analysis is done at the first
+factorisation and reused while the sparsity stays). PETSc options under the prefix change them, from
+the PETSC_OPTIONS environment variable or the command line (``-comove_pc_factor_mat_solver_type
+petsc``, ``-comove_mat_mumps_icntl_7 5``, ``-comove_ksp_type gmres -comove_pc_type gamg``) or from
+``NewtonSettings.petsc_options`` (keys without the prefix). The settings' options are put into
+PETSc's global database only while this solver reads them (set-up and every solve: MUMPS and GAMG
+read theirs at the factorisation, not at ``setFromOptions``) and removed afterwards, so two models
+never share them. A solver that is not a factorisation (an iterative one) gets the rigid-body modes
+of the 2-D displacement space as the matrix's near-nullspace (for algebraic multigrid).
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+PREFIX = "comove_"
+DEFAULTS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+
+
+class SolverOptionError(ValueError):
+    """PETSc options that PETSc refuses (an unknown type, a value of the wrong kind)."""
+
+
+def _text(value) -> str | None:
+    """An option's value as PETSc reads it (None: a flag without value)."""
+    if value is None:
+        return None
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
+@contextmanager
+def pushed(options: dict):
+    """``options`` (keys without the prefix) in PETSc's database under the prefix for the duration;
+    whatever the database held before under those names is put back afterwards."""
+    db = PETSc.Options()
+    saved = {}
+    for key, value in options.items():
+        name = PREFIX + key.lstrip("-")
+        saved[name] = db.getString(name) if db.hasName(name) else False
+        db.setValue(name, _text(value))
+    try:
+        yield
+    finally:
+        for name, old in saved.items():
+            db.delValue(name)
+            if old is not False:
+                db.setValue(name, old or None)
+
+
+def make_ksp(comm, A: PETSc.Mat, options: dict) -> PETSc.KSP:
+    """The KSP on A: the defaults, then the options of the database and ``options``."""
+    for key in options:
+        if not isinstance(key, str) or not key.strip("-"):
+            raise SolverOptionError(f"petsc_options: {key!r} is not an option name")
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(PREFIX)
+    ksp.setOperators(A)
+    ksp.setType(DEFAULTS["ksp_type"])
+    pc = ksp.getPC()
+    pc.setType(DEFAULTS["pc_type"])
+    pc.setFactorSolverType(DEFAULTS["pc_factor_mat_solver_type"])
+    try:
+        with pushed(options):
+            ksp.setFromOptions()
+    except PETSc.Error as err:
+        shown = ", ".join(f"{k}={v}" for k, v in options.items()) or "none given in the settings"
+        raise SolverOptionError(f"PETSc refused the linear solver's options under the prefix "
+                                f"{PREFIX!r} ({shown}; PETSC_OPTIONS too): PETSc error {err}") from None
+    return ksp
+
+
+def is_direct(ksp: PETSc.KSP) -> bool:
+    """A factorisation applied once (preonly with LU or Cholesky)."""
+    return ksp.getType() == "preonly" and ksp.getPC().getType() in ("lu", "cholesky")
+
+
+def rigid_body_modes(V, A: PETSc.Mat) -> PETSc.NullSpace:
+    """The two translations and the in-plane rotation of the 2-D displacement space V (blocked,
+    2 components per node), orthonormalised, as a PETSc null space on A's layout."""
+    n = V.dofmap.index_map.size_local
+    xy = V.tabulate_dof_coordinates()[:n, :2]
+    comm = V.mesh.comm                          # the rotation about the centroid (better conditioned)
+    xy = xy - comm.allreduce(xy.sum(axis=0), op=MPI.SUM) / max(comm.allreduce(n, op=MPI.SUM), 1)
+    modes = []
+    for values in (np.c_[np.ones(n), np.zeros(n)], np.c_[np.zeros(n), np.ones(n)],
+                   np.c_[-xy[:, 1], xy[:, 0]]):
+        vec = A.createVecRight()
+        vec.array[:] = values.ravel()
+        modes.append(vec)
+    for k, vec in enumerate(modes):             # Gram-Schmidt (collective dots and norms)
+        for prev in modes[:k]:
+            vec.axpy(-prev.dot(vec), prev)
+        vec.normalize()
+    return PETSc.NullSpace().create(vectors=modes, comm=A.getComm())
