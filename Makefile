@@ -1,7 +1,7 @@
 # comove_dolfinx: set-up and main jobs.
 #   make demo   install what is missing, then run the main job (the beam scene)
 #   make test   install what is missing, then run the test suite (serial and 2 MPI ranks)
-#   make bench  run the speed/accuracy benchmarks (writes results/bench/)
+#   make study  speed against accuracy across methods (results/study/); make stability, make cost
 #
 # Where dolfinx comes from (DOLFINX=auto|apt|pip; README, Platforms):
 #   apt   Debian's packages: Debian 12 has dolfinx 0.5.2, Debian 13 has 0.9. They serve
@@ -53,7 +53,7 @@ MPIRUN  := mpirun -n $(NP)
 endif
 STAMP   := $(VENV)/.installed-$(SOURCE)
 
-.PHONY: all system venv demo test test-serial test-mpi bench clean
+.PHONY: all system venv demo test test-serial test-mpi study stability cost clean
 
 all: demo
 
@@ -102,8 +102,19 @@ test: venv
 	$(PY) -m pytest -q tests
 	$(MPIRUN) $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
 
-bench: venv
-	$(PY) -m comove_dolfinx.bench all --out results/bench
+# speed against accuracy, where methods break, what an iteration costs (docs/study.md, docs/stability.md,
+# docs/performance.md); each writes CSV, PNG and Markdown under results/
+study: venv
+	$(VENV)/bin/comove study all --out results/study
+
+stability: venv
+	$(PY) -m comove_dolfinx.stability all --out results/stability
+
+cost: venv
+	$(PY) -m comove_dolfinx.cost floor --out results/cost
+	$(PY) -m comove_dolfinx.cost solvers --out results/cost
+	$(PY) -m comove_dolfinx.cost scale --out results/cost
+	$(MPIRUN) $(PY) -m comove_dolfinx.cost scale --out results/cost
 
 clean:
 	rm -rf $(VENV) results .pytest_cache

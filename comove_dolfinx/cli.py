@@ -199,6 +199,7 @@ def main(argv=None) -> int:
     st.add_argument("--repeat", type=int, default=3, help="runs of each case, for the CPU time's spread")
     st.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2)")
     st.add_argument("--quick", action="store_true", help="the updates' sweeps only, fewer increments")
+    st.add_argument("--replot", action="store_true", help="charts and summaries again from the saved runs")
     args = parser.parse_args(argv)
     if args.command == "study":
         return _study(args)
@@ -238,7 +239,7 @@ def _study(args) -> int:
     if err is not None:
         print(f"comove: {err}", file=sys.stderr)
         return 2
-    return study_main(scenes, out, args.repeat, args.jobs, args.quick)
+    return study_main(scenes, out, args.repeat, args.jobs, args.quick, args.replot)
 
 
 def _own_signals() -> None:

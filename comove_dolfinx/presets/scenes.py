@@ -130,7 +130,7 @@ class Plate(ContactScene):
     size: float = 0.25
     # From the last converged state: the tangent start takes 6.4 Newton iterations per increment
     # against 8.6 at the default gamma0, but with gamma0 = 1000 it stalls at p = 9.5 in stick-slip
-    # cycling (bench contact), where this start completes the run.
+    # cycling (measured by an earlier contact benchmark), where this start completes the run.
 
     def validate(self):
         super().validate()
@@ -248,9 +248,9 @@ class Ring(ContactScene):
         # hinges' borders switch between loading and unloading, free boundary points swing into
         # the plate); Crisfield's energy line search scales them back. Convergence: out-of-balance
         # force below 1e-3 of the forces carried (||F_int||): P within 0.003 % of a run converged to
-        # 1e-6 (0.06 % at 40 increments; bench ring_tolerance), where 5e-3 puts up to 2.2 % into P.
+        # 1e-6 (0.06 % at 40 increments, measured by an earlier tolerance study), where 5e-3 puts up to 2.2 % into P.
         # gamma0 = 0.1 would take 3.9 iterations per increment instead of 4.4, but its penetration
-        # (2.5e-3) delays the crown's lift-off from delta = 1.49 to 1.55 (bench ring_newton).
+        # (2.5e-3) delays the crown's lift-off from delta = 1.49 to 1.55 (measured by an earlier Newton study).
         from .build import NewtonSettings
         return NewtonSettings(line_search="energy", energy_eta=0.2, scale="force", rtol=1e-3)
 

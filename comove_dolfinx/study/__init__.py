@@ -46,11 +46,25 @@ def study(scene: str, out: pathlib.Path, repeat: int = 3, jobs: int = 2, quick: 
     return rows, ref, claims
 
 
-def main(scenes: list[str], out: pathlib.Path, repeat: int, jobs: int, quick: bool) -> int:
+def replot(scene: str, out: pathlib.Path) -> tuple[list[dict], dict, list[dict]]:
+    """Charts, summary and claim rows again from a finished study's runs.csv and reference.json."""
+    from . import report
+    plan, folder = PLANS[scene], out / scene
+    rows = report.read_rows(folder / "runs.csv")
+    ref = json.loads((folder / "reference.json").read_text())
+    report.add_errors(rows, ref["value"])
+    claims = report.claim_rows(plan, rows)
+    report.chart(plan, rows, ref, folder / "pareto.png")
+    (folder / "summary.md").write_text(report.markdown(plan, rows, ref, claims))
+    return rows, ref, claims
+
+
+def main(scenes: list[str], out: pathlib.Path, repeat: int, jobs: int, quick: bool,
+         again: bool = False) -> int:
     from . import report
     claims, parts = [], []
     for s in scenes:
-        _, _, c = study(s, out, repeat, jobs, quick)
+        _, _, c = replot(s, out) if again else study(s, out, repeat, jobs, quick)
         claims += c
         parts.append((out / s / "summary.md").read_text())
     report.write_csv(out / "claim.csv", claims)

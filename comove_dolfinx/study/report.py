@@ -107,6 +107,7 @@ def chart(plan: ScenePlan, rows: list[dict], ref: dict, path: pathlib.Path) -> N
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import matplotlib.ticker  # noqa: F401
+    import matplotlib.transforms  # noqa: F401
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(14, 5.6), layout="constrained")
     families = list(dict.fromkeys(r["family"] for r in rows))
     cmap = plt.get_cmap("tab20")
@@ -117,8 +118,9 @@ def chart(plan: ScenePlan, rows: list[dict], ref: dict, path: pathlib.Path) -> N
         style = "o-" if fam.startswith("update") else ("s--" if fam.startswith("mesh") else "^:")
         ax.plot([r["cpu_s"] for r in ok], [max(r["error_percent"], floor) for r in ok], style, ms=4,
                 color=cmap(i % 20), label=fam)
-        bad = [r for r in rs if math.isnan(r["error_percent"])]
-        ax.plot([r["cpu_s"] for r in bad], [floor] * len(bad), "x", color=cmap(i % 20), ms=8)
+        bad = [r for r in rs if math.isnan(r["error_percent"])]       # along the top edge
+        ax.plot([r["cpu_s"] for r in bad], [0.97] * len(bad), "x", color=cmap(i % 20), ms=8, mew=2,
+                transform=matplotlib.transforms.blended_transform_factory(ax.transData, ax.transAxes))
     front = pareto(rows)
     ax.step([r["cpu_s"] for r in front], [max(r["error_percent"], floor) for r in front], "k-",
             where="post", lw=2.2, alpha=0.35, label="Pareto front")
@@ -127,7 +129,7 @@ def chart(plan: ScenePlan, rows: list[dict], ref: dict, path: pathlib.Path) -> N
     ax.set(xscale="log", yscale="log", xlabel="CPU seconds of the whole process (median of repeats)",
            ylabel="|q / q_ref - 1| [%]",
            title=f"{plan.name}: {plan.label}\nreference {ref['value']:.6g}, {ref['how']},\n"
-                 f"estimated error {100 * ref['error'] / abs(ref['value']):.2g} %  (x: run failed)")
+                 f"estimated error {100 * ref['error'] / abs(ref['value']):.2g} %  (x at the top: run failed)")
     fmt = matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}")
     ax.xaxis.set_major_formatter(fmt)
     ax.xaxis.set_minor_formatter(fmt)
@@ -148,6 +150,20 @@ def chart(plan: ScenePlan, rows: list[dict], ref: dict, path: pathlib.Path) -> N
     bx.legend(fontsize=7)
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def read_rows(path: pathlib.Path) -> list[dict]:
+    """The rows of a saved runs.csv, numbers as numbers."""
+    def num(v):
+        try:
+            return int(v)
+        except ValueError:
+            try:
+                return float(v)
+            except ValueError:
+                return v
+    with open(path, newline="") as fh:
+        return [{k: num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
 
 
 def _fmt(v, spec=".3g", unit=""):
