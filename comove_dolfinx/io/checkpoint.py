@@ -73,6 +73,7 @@ class Checkpoint(Writer):
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
         self.count = len(run.resumed_rows)
         self._coords = {}
+        self._prev, self._ranks = None, run.comm.size
 
     def write(self, run, row, increment) -> None:
         self.count += 1
@@ -121,9 +122,16 @@ class Checkpoint(Writer):
 
     def _commit(self, n: int, text: str) -> None:
         write_atomic(self.folder / "meta.json", text)
-        for f in self.folder.iterdir():                # older checkpoints, now superseded
-            if f.name.startswith("state_") and f"_{n:05d}" not in f.name:
+        # older checkpoints, now superseded: a sweep of the folder the first time (files of an
+        # earlier run), then the previous increment's files by name
+        if self._prev is None:
+            old = [f for f in self.folder.iterdir() if f.name.startswith("state_")]
+        else:
+            old = [self.folder / f"state_{self._prev:05d}_rank{r}.npz" for r in range(self._ranks)]
+        for f in old:
+            if f"_{n:05d}" not in f.name:
                 f.unlink(missing_ok=True)
+        self._prev = n
 
 
 def load(folder, comm) -> tuple[dict, list]:
