@@ -1,4 +1,4 @@
-"""The stability map's pieces (comove_dolfinx/stability.py, docs/stability.md): the cause classifier,
+"""The stability map's pieces (comove_dolfinx/stability/, docs/stability.md): the cause classifier,
 the chatter test, and the Jaumann simple-shear case against its closed forms (Dienes 1979)."""
 import numpy as np
 import pytest
@@ -83,9 +83,8 @@ def test_sr_split_out_of_range_in_shear():
     """One shear increment of 2.5 (sin theta = 1.25 > 1): the S-R update has no split; Newton's
     iterates stay beyond the range and the failure is put down to the S-R split. With cut-backs the
     same run completes."""
-    rec = st.Recorder()
-    with st.instruments(rec):
-        res = st.simple_shear("sr", 2.5, 1, max_cutbacks=0)
+    rec = st.Recorder()                   # Newton's monitor
+    res = st.simple_shear("sr", 2.5, 1, max_cutbacks=0, monitor=rec)
     assert not res.completed
     assert rec.max_omega2 > 1.0           # at the last iterate Newton tried (its line search halves)
     assert st.classify(res.message, rec.nan_diagnosis) == st.SR_RANGE

@@ -16,6 +16,17 @@ internal forces, which can exceed rtol * R_scale when the load increments are sm
 step counts). Corrections are scaled by the line searches of linesearch.py. A failure of the
 linear solve on any rank (an error, a negative PETSc reason, a correction that is not finite) is a
 failed iteration on every rank. docs/theory.md section 7.
+
+Observation: ``NewtonSettings.monitor`` is an object with any of the methods
+
+* ``iteration(newton, it, rnorm)``: at each residual test (rtol, atol) of an accepted iterate, after
+  ``it`` corrections of this solve (``model.u`` holds the iterate, ``rnorm`` is its ||R||);
+* ``rejected(newton, error)``: when the stress update of an iterate (a Newton iterate, a line
+  search's trial or the predictor's) raises :class:`InvertedElement` or :class:`ReturnMapFailure`,
+  before the solver handles it; ``model.u`` still holds that iterate (a line search then goes back);
+* ``solved(newton, ok, its, reason)``: when :meth:`Newton.solve` returns, with what it returns.
+
+It watches and must not change the model. Without a monitor (the default) nothing is called.
 """
 from __future__ import annotations
 
@@ -79,6 +90,8 @@ class NewtonSettings:
                                    # residual of the run; "force", ||F_int|| of the iterate
     petsc_options: dict = field(default_factory=dict)   # the linear solver's PETSc options, keys
                                    # without the prefix comove_: {"pc_factor_mat_solver_type": "petsc"}
+    monitor: object | None = None  # an observer of the iterations (methods iteration, rejected,
+                                   # solved: the module docstring), e.g. stability.Recorder
 
 
 class Newton(LineSearches):
@@ -115,7 +128,11 @@ class Newton(LineSearches):
         """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm."""
         m, b = self.model, self.b
         with self.timer("stress update"):
-            m.evaluate_stress()
+            try:
+                m.evaluate_stress()
+            except (InvertedElement, ReturnMapFailure) as err:
+                self._notify("rejected", err)
+                raise
         with self.timer("assembly"):
             x = compat.petsc_vec(m.u)
             lift = compat.constraint_gap(self._w, m.bcs, x) > 0.0     # else the lifting adds 0
@@ -151,16 +168,32 @@ class Newton(LineSearches):
         compat.assemble_vector(f, self.model.internal_force_form)
         return f.norm()
 
-    def _converged(self, rnorm: float) -> bool:
-        """The residual test; with scale "force" against ||F_int|| of the current iterate."""
+    def _notify(self, event: str, *args) -> None:
+        """Call the monitor's method ``event`` (if there is a monitor and it has one)."""
+        method = getattr(self.settings.monitor, event, None)
+        if method is not None:
+            method(self, *args)
+
+    def _converged(self, rnorm: float, it: int) -> bool:
+        """The residual test of the iterate after ``it`` corrections; with scale "force" against
+        ||F_int|| of the current iterate."""
         s = self.settings
+        if s.monitor is not None:
+            self._notify("iteration", it, rnorm)
         if s.scale == "force":
             with self.timer("force scale"):
                 self.residual_scale = self.force_scale()
         return rnorm <= s.rtol * self.residual_scale + s.atol
 
     def solve(self) -> tuple[bool, int, str]:
-        """Iterate from the current ``model.u``; returns (converged, iterations, reason)."""
+        """Iterate from the current ``model.u``; returns (converged, iterations, reason), also to
+        the settings' monitor."""
+        ok, its, reason = self._iterate()
+        if self.settings.monitor is not None:
+            self._notify("solved", ok, its, reason)
+        return ok, its, reason
+
+    def _iterate(self) -> tuple[bool, int, str]:
         m, s = self.model, self.settings
         self.history = []
         try:
@@ -170,7 +203,7 @@ class Newton(LineSearches):
         if s.scale == "initial":
             self.residual_scale = max(self.residual_scale, r0)
         for it in range(1, s.max_it + 1):
-            if self._converged(rnorm):
+            if self._converged(rnorm, it - 1):
                 return True, it - 1, "converged"
             with self.timer("jacobian"):
                 compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
@@ -199,7 +232,7 @@ class Newton(LineSearches):
                 return False, it, f"diverged (|R| = {rnorm:.3e})"
             if alpha == 1.0 and dnorm <= s.stol * compat.petsc_vec(m.u).norm():
                 return True, it, "converged"
-        converged = self._converged(rnorm)
+        converged = self._converged(rnorm, s.max_it)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
 
     def load_rate(self, t: float, rate: fem.Function, eps: float) -> bool:
