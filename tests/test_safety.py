@@ -122,9 +122,9 @@ def test_guards_stop_folding_and_warn_of_untrustworthy_results(tmp_path):
 @pytest.mark.parametrize("n", [1, 2])
 def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
     """The ring killed (kill -9) after a dozen increments and restarted from its last checkpoint
-    (--restart) gives the stored history of the uninterrupted run: the same increments and Newton
-    iterations, every column to 1e-12 of its largest value in serial (1e-6 on two ranks, where the
-    parallel direct solver's round-off differs from the serial one's)."""
+    (--restart) gives the history of the uninterrupted run on the same ranks: the same increments
+    and Newton iterations, every column to 1e-12 of its largest value in serial (1e-6 on two ranks,
+    where the parallel direct solver's round-off differs from run to run)."""
     import numpy as np
     out = tmp_path / "run"
     p = subprocess.Popen(launch.command([*RUN, "ring", "--out", out, "--no-progress"], n=n),
@@ -143,8 +143,12 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
     assert 10 <= meta["increment"] < 37          # the kill may land between the history and the checkpoint
     r = launch.run([*RUN, "ring", "--out", out, "--no-progress", "--restart"], n=n)
     assert r.returncode == 0, r.stdout + r.stderr
+    # the uninterrupted run on this platform (the stored history agrees with it to the tolerance
+    # of test_histories: the dolfinx versions round differently)
+    full = launch.run([*RUN, "ring", "--out", tmp_path / "full", "--no-progress"], n=n)
+    assert full.returncode == 0, full.stdout + full.stderr
     new = _rows(out / "history.csv")
-    ref = _rows(pathlib.Path(__file__).resolve().parent / "reference" / "ring.csv")
+    ref = _rows(tmp_path / "full" / "history.csv")
     assert len(new) == len(ref) == 37
     assert [r["newton_its"] for r in new] == [r["newton_its"] for r in ref]
     tol = 1e-12 if n == 1 else 1e-6
