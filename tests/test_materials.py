@@ -1,4 +1,4 @@
-"""Material-point tests of the materials: validation, closed forms, tangents, isotropy, Chen against J2 and its rate law.
+"""Material-point tests: validation, closed forms, tangents, isotropy, Chen against J2 and its rate law.
 
 Stored tensors are (xx, yy, zz, xy) with the tensor shear component; see the module docstring.
 """

@@ -5,7 +5,6 @@ files with an earlier run's."""
 import csv
 import json
 import os
-import pathlib
 import signal
 import subprocess
 import time

@@ -86,6 +86,13 @@ class ScenePlan:
         return out
 
 
+# penalty at a tenth and ten times the default gamma0 = 100, Nitsche's three variants at the default
+ELASTIC_CONTACTS = (("penalty gamma0 10", ("gamma0=10",)), ("penalty gamma0 1000", ("gamma0=1000",)),
+                    ("nitsche theta 1", ("contact=nitsche", "theta=1")),
+                    ("nitsche theta 0", ("contact=nitsche", "theta=0")),
+                    ("nitsche theta -1", ("contact=nitsche", "theta=-1")))
+
+
 def _ring_bound() -> float:
     return RING_P0 / math.sqrt(1.0 - (1.0 / RING_D) ** 2)
 
@@ -97,17 +104,11 @@ PLANS = {
     "beam": ScenePlan(
         "beam", "contact_force", None, "force on the foundation [kgf/cm] at q = 0.5", n0=20, size0=0.125,
         steps=(5, 10, 20, 40, 80),
-        contacts=(("penalty gamma0 10", ("gamma0=10",)), ("penalty gamma0 1000", ("gamma0=1000",)),
-                  ("nitsche theta 1", ("contact=nitsche", "theta=1")),
-                  ("nitsche theta 0", ("contact=nitsche", "theta=0")),
-                  ("nitsche theta -1", ("contact=nitsche", "theta=-1")))),
+        contacts=ELASTIC_CONTACTS),
     "plate": ScenePlan(
         "plate", "contact_force", None, "force on the base [kgf] at p = 10", n0=20, size0=0.25,
         steps=(5, 10, 20, 40, 80),
-        contacts=(("penalty gamma0 10", ("gamma0=10",)), ("penalty gamma0 1000", ("gamma0=1000",)),
-                  ("nitsche theta 1", ("contact=nitsche", "theta=1")),
-                  ("nitsche theta 0", ("contact=nitsche", "theta=0")),
-                  ("nitsche theta -1", ("contact=nitsche", "theta=-1")))),
+        contacts=ELASTIC_CONTACTS),
     "ring": ScenePlan(
         "ring", "force", 1.0, "crushing force P [kgf/cm] at delta = 1", n0=36, size0=0.22,
         bounds={"rigid-plastic (DeRunz-Hodge), a lower bound": _ring_bound()},
