@@ -95,3 +95,15 @@ def test_timing_accounts_for_the_whole_process(tmp_path):
     assert res.process["cpu_s"] > 0.0
     assert "process: wall" in res.timing_report
     assert np.isfinite(res.process["compiler_cpu_s"])
+
+
+@pytest.mark.parametrize("args, msg", [
+    (["nope"], "study 'nope': choose one of elastica, beam, plate, ring or all"),
+    (["ring", "--repeat", "0"], "--repeat 0 --jobs 2: give whole numbers >= 1"),
+    (["ring", "--out", ""], "--out '': give the output folder")])
+def test_study_refuses_bad_arguments_in_one_line(args, msg, tmp_path):
+    import launch
+    out = [] if "--out" in args else ["--out", str(tmp_path / "s")]
+    p = launch.run(["-m", "comove_dolfinx.cli", "study", *args, *out])
+    assert p.returncode == 2 and p.stderr.strip() == f"comove: {msg}"
+    assert not (tmp_path / "s").exists()
