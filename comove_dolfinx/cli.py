@@ -224,7 +224,10 @@ def _study(args) -> int:
     from .study import main as study_main
     scenes = list(PLANS) if args.scene == "all" else [args.scene]
     err = None
-    if any(s not in PLANS for s in scenes):
+    if _ranks() > 1:
+        err = ("study: it starts its runs as processes of its own, two at a time (--jobs): "
+               "start it without mpirun")
+    elif any(s not in PLANS for s in scenes):
         err = f"study {args.scene!r}: choose one of {', '.join(PLANS)} or all"
     elif args.repeat < 1 or args.jobs < 1:
         err = f"--repeat {args.repeat} --jobs {args.jobs}: give whole numbers >= 1"
@@ -249,6 +252,15 @@ def _own_signals() -> None:
     opts = os.environ.get("PETSC_OPTIONS", "")
     if "-no_signal_handler" not in opts:
         os.environ["PETSC_OPTIONS"] = f"{opts} -no_signal_handler".strip()
+
+
+def _ranks() -> int:
+    """The number of MPI ranks from the launcher's environment (before MPI is loaded)."""
+    import os
+    for var in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"):
+        if var in os.environ:
+            return int(os.environ[var])
+    return 1
 
 
 def _rank() -> int:

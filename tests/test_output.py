@@ -100,18 +100,24 @@ def test_vtk_keeps_every_p2_node_and_all_fields_in_one_dataset(tmp_path, n):
     assert u[:2] == pytest.approx([hist[-1]["tip_ux"], hist[-1]["tip_uy"]], rel=1e-9) and u[2] == 0.0
 
 
+def _pressed_block(tmp_path, writer, q=20.0):
+    """A 2 x 1 block pressed by a follower pressure q onto a frictionless plane in two increments,
+    written by ``writer``; returns q."""
+    md = geometry.rectangle(2.0, 1.0, 0.25, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
+    c = cm.Contact("bottom", cm.Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
+    res = cm.Job(cm.Body(md, "plane_stress", cm.Elastic(1000.0, 0.3)),
+                 [cm.Fixed("left", component=0), cm.Pressure("top", q), c], [cm.Step(2)],
+                 writers=[writer]).run()
+    assert res.completed
+    return q
+
+
 def test_vtk_contact_pressure_is_the_contact_law(tmp_path):
     """The block of the next test, written as VTK: the contact pressure is q at every node of the
     bottom face (to 1e-8), exactly 0 at every other node, never negative."""
     import meshio
 
-    q = 20.0
-    md = geometry.rectangle(2.0, 1.0, 0.25, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
-    c = cm.Contact("bottom", cm.Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
-    res = cm.Job(cm.Body(md, "plane_stress", cm.Elastic(1000.0, 0.3)),
-                 [cm.Fixed("left", component=0), cm.Pressure("top", q), c], [cm.Step(2)],
-                 writers=[cm.VTK(tmp_path / "out")]).run()
-    assert res.completed
+    q = _pressed_block(tmp_path, cm.VTK(tmp_path / "out"))
     steps = _pvd(tmp_path / "out")
     assert len(steps) == 2
     m = meshio.read(steps[-1][1])
@@ -140,14 +146,8 @@ def test_xdmf_contact_pressure_is_the_contact_law(tmp_path):
     import subprocess
     import sys
 
-    q = 20.0
-    md = geometry.rectangle(2.0, 1.0, 0.25, order=2, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
-    c = cm.Contact("bottom", cm.Plane((0.0, 0.0), (0.0, 1.0)), method="penalty", gamma0=10.0)
     # the XDMF writer adds every contact item's contact_pressure to its fields
-    res = cm.Job(cm.Body(md, "plane_stress", cm.Elastic(1000.0, 0.3)),
-                 [cm.Fixed("left", component=0), cm.Pressure("top", q), c], [cm.Step(2)],
-                 writers=[cm.XDMF(tmp_path / "results.xdmf")]).run()
-    assert res.completed
+    q = _pressed_block(tmp_path, cm.XDMF(tmp_path / "results.xdmf"))
     r = subprocess.run([sys.executable, "-c", _READ_CONTACT, str(tmp_path / "results.h5")],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr

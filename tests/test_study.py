@@ -107,3 +107,12 @@ def test_study_refuses_bad_arguments_in_one_line(args, msg, tmp_path):
     p = launch.run(["-m", "comove_dolfinx.cli", "study", *args, *out])
     assert p.returncode == 2 and p.stderr.strip() == f"comove: {msg}"
     assert not (tmp_path / "s").exists()
+
+
+def test_study_refuses_to_start_under_mpirun(tmp_path, monkeypatch, capsys):
+    """Under a launcher every rank would start the whole study into the same folder."""
+    from comove_dolfinx import cli
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    assert cli.main(["study", "ring", "--out", str(tmp_path / "s")]) == 2
+    assert capsys.readouterr().err.startswith("comove: study: it starts its runs as processes of its own")
+    assert not (tmp_path / "s").exists()

@@ -28,9 +28,9 @@ class CheckpointError(ValueError):
     """A checkpoint that cannot be used; the message names it and the fix."""
 
 
-def _owned(model, kind, arr, X):
-    """(key coordinates, values) of this rank's owned entries of a saved array; X: the reference
-    coordinates of its local entries (_local_coordinates)."""
+def _owned(model, kind, arr):
+    """(key coordinates, values) of this rank's owned entries of a saved array."""
+    X = _local_coordinates(model, kind)
     if isinstance(kind, str) and kind == "V":
         n = model.V.dofmap.index_map.size_local
         return X[:n], np.asarray(arr).reshape(-1, 2)[:n]
@@ -61,18 +61,10 @@ class Checkpoint(Writer):
             raise CheckpointError(f"every = {every!r}: give a whole number >= 1")
         self.folder, self.every = pathlib.Path(folder), every
         self.count = 0
-        self._coords: dict = {}          # reference coordinates per kind: fixed during a run
-
-    def _coordinates(self, model, kind):
-        key = kind if isinstance(kind, str) else id(kind)
-        if key not in self._coords:
-            self._coords[key] = (kind, _local_coordinates(model, kind))
-        return self._coords[key][1]
 
     def open(self, run) -> None:
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
         self.count = len(run.resumed_rows)
-        self._coords = {}
         self._prev, self._ranks = None, run.comm.size
 
     def write(self, run, row, increment) -> None:
@@ -86,7 +78,7 @@ class Checkpoint(Writer):
         def put(name, value):
             if isinstance(value, tuple):              # (kind, local array): owned entries, keyed by position
                 kind, arr = value
-                X, vals = _owned(m, kind, arr, self._coordinates(m, kind))
+                X, vals = _owned(m, kind, arr)
                 tag = kind if isinstance(kind, str) else "S"
                 arrays[f"X{tag}"], arrays[name], kinds[name] = X, vals, tag
             else:

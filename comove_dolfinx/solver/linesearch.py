@@ -38,9 +38,8 @@ class LineSearches:
         if alpha is None:
             self.model.u.x.array[:] = u0
             return r_old, 0.0, err
-        last = getattr(self, "_last_trial", None)
-        if last is not None and last[0] == alpha:
-            return last[1], alpha, None
+        if self._last_trial is not None and self._last_trial[0] == alpha:
+            return self._last_trial[1], alpha, None
         r, _ = self._trial(u0, alpha)
         return r, alpha, None
 

@@ -120,6 +120,7 @@ class Newton(LineSearches):
         self._b_old = self.b.duplicate()
         self._f = self.b.duplicate()
         self._w = self.b.duplicate()          # scratch: the constraint gap g - u
+        self._last_trial = None               # (alpha, ||R||) of the line search's last trial
         self.factorised = False            # the KSP holds the LU factors of a tangent
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
