@@ -10,6 +10,10 @@ import argparse
 import logging
 import sys
 
+#: seconds between checkpoints at least (the last increment is saved when a run ends): a restart
+#: after a kill -9 repeats at most this much work, and a short run writes one checkpoint
+CHECKPOINT_INTERVAL = 5.0
+
 
 def _quiet_jit() -> None:
     # ffcx/cffi report every compilation through the root logger at INFO level
@@ -36,7 +40,7 @@ def _verbose(comm) -> None:
 
 
 def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, overwrite: bool = False,
-              restart: bool = False, checkpoint_every: int = 1):
+              restart: bool = False, checkpoint_every: int = 1, checkpoint_interval: float = CHECKPOINT_INTERVAL):
     """Run a preset ``scene`` into the folder ``out_dir`` (history.csv, results.pvd with one .vtu per
     increment, run.json, the console's lines); returns the :class:`Results`. ``newton``: settings
     instead of the scene's; ``overwrite``: replace the results of an earlier run there."""
@@ -55,7 +59,8 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
         md = scene.mesh_data(comm)
         writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
                    RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
-                   Console(scene.name, scene.columns), Checkpoint(out / "checkpoint", checkpoint_every),
+                   Console(scene.name, scene.columns),
+                   Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval),
                    _signal_writer()]
         job = scene.job(md, writers)
         if newton is not None:
@@ -79,7 +84,7 @@ def _errors():
 
 
 def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: bool = False,
-                restart: bool = False, checkpoint_every: int = 1):
+                restart: bool = False, checkpoint_every: int = 1, checkpoint_interval: float = CHECKPOINT_INTERVAL):
     """Run a problem file (problem.py) into ``out_dir``, with the writers of the scenes."""
     import pathlib
 
@@ -96,7 +101,7 @@ def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: boo
     with RunFolder(out, overwrite, comm, restart):
         writers = [HistoryCSV(out / "history.csv"), VTK(out),
                    RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem),
-                   Checkpoint(out / "checkpoint", checkpoint_every), _signal_writer()]
+                   Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval), _signal_writer()]
         return problem.build(data, comm, writers).run(progress=progress,
                                                       restart=out / "checkpoint" if restart else None)
 
@@ -157,10 +162,12 @@ def _run(args) -> int:
     try:
         if problem:
             result = run_problem(args.scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
-                                 restart=args.restart, checkpoint_every=args.checkpoint_every)
+                                 restart=args.restart, checkpoint_every=args.checkpoint_every,
+                                 checkpoint_interval=args.checkpoint_interval)
         else:
             result = run_scene(scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
-                               restart=args.restart, checkpoint_every=args.checkpoint_every)
+                               restart=args.restart, checkpoint_every=args.checkpoint_every,
+                                 checkpoint_interval=args.checkpoint_interval)
     except errors as err:
         return fail(err)
     except KeyboardInterrupt as err:
@@ -192,6 +199,9 @@ def main(argv=None) -> int:
                      help="go on from the last checkpoint in the --out folder (same scene, same ranks)")
     run.add_argument("--checkpoint-every", type=int, default=1, metavar="K",
                      help="save the state every K converged increments (default 1)")
+    run.add_argument("--checkpoint-interval", type=float, default=CHECKPOINT_INTERVAL, metavar="S",
+                     help="and no sooner than S seconds after the last save; the last increment is "
+                          f"always saved when the run ends (default {CHECKPOINT_INTERVAL:g}; 0: every K-th)")
     sub.add_parser("scenes", help="list the scenes and their parameters with defaults")
     st = sub.add_parser("study", help="speed against accuracy across methods (docs/study.md)")
     st.add_argument("scene", help="elastica, beam, plate, ring or all")
@@ -282,6 +292,8 @@ def _check_early(args):
         return "--out '': give the output folder"
     if args.checkpoint_every < 1:
         return f"--checkpoint-every {args.checkpoint_every}: give a whole number >= 1"
+    if not 0.0 <= args.checkpoint_interval < float("inf"):
+        return f"--checkpoint-interval {args.checkpoint_interval}: give a number of seconds >= 0"
     if args.restart and args.overwrite:
         return "--restart and --overwrite: choose one (go on from the checkpoint, or start afresh)"
     try:

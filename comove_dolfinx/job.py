@@ -241,7 +241,7 @@ class Job:
                     t = k + inc.load
                     row = {"step": len(res.rows) + 1, "time": t,
                            "load": self.load(t) if self.load is not None else t}
-                    with timer("output"):
+                    with timer("probes and checks"):
                         for p in self.probes:
                             row.update(collective(comm, p, model))
                         row.update(newton_its=inc.newton_its, wall_s=inc.wall_s)
@@ -253,6 +253,7 @@ class Job:
                         self._guards(run, row, contacts, stats)
                         res.rows.append(row)
                         res.increments.append(inc)
+                    with timer("output"):
                         for w in self.writers:
                             collective(comm, w.write, run, row, inc)
                     bar.update(inc.load - last)

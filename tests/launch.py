@@ -8,7 +8,8 @@ import sys
 _VENV_MPIEXEC = pathlib.Path(sys.executable).parent / "mpiexec"
 LAUNCHER = str(_VENV_MPIEXEC) if _VENV_MPIEXEC.exists() else "mpirun"
 # root may run Open MPI, more ranks than cores are allowed (Open MPI 4: OMPI_MCA_..., 5: PRTE_MCA_...)
-ENV = dict(os.environ, MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+ENV = dict(os.environ, MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
+           OMPI_ALLOW_RUN_AS_ROOT="1",
            OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1",
            PRTE_MCA_rmaps_default_mapping_policy=":oversubscribe")
 

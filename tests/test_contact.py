@@ -205,3 +205,23 @@ def test_contact_input_errors(block):
     m.finalize()
     with pytest.raises(ContactError, match="starts inside"):
         c.check_start()
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("degree", [1, 2])
+def test_boundary_fields_interpolate_like_dolfinx(tmp_path_factory, degree):
+    """The contact output fields take a P1 field into their space in numpy (vertex values, edge
+    midpoints as means): the same values as dolfinx's own interpolation, at every dof."""
+    md = geometry.rectangle(2.0, 1.0, 0.25, order=degree, comm=MPI.COMM_WORLD,
+                            cache_dir=str(tmp_path_factory.mktemp("meshes")))
+    c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)))
+    m = Model(Body(md, "plane_strain", Elastic(E, NU), degree=degree), [Fixed("top"), c])
+    m.finalize()
+    g = c._f1
+    g.x.array[:] = np.random.default_rng(3).random(g.x.array.size)
+    expect = c.pressure.copy()
+    expect.interpolate(g)
+    dofs, a, b = c._p1_to_s
+    got = np.full_like(expect.x.array, np.nan)
+    got[dofs] = 0.5 * (g.x.array[a] + g.x.array[b])
+    assert np.abs(got - expect.x.array).max() <= 1e-15

@@ -38,13 +38,13 @@ def report(text):
 
 RETURN_MAP = COMMON + """
 calls = [0]
-j2 = return_maps.j2_return
+j2 = return_maps.j2_return_points
 def flaky(*args, **kw):
     calls[0] += 1
     if comm.rank == 1 and 4 <= calls[0] <= 9:      # longer than the step halvings of Newton
         raise RuntimeError("injected return-map failure")
     return j2(*args, **kw)
-return_maps.j2_return = flaky
+return_maps.j2_return_points = flaky
 res = solver.run()
 report(f"completed={res.completed} increments={len(res.increments)} "
        f"cutbacks={sum(i.cutbacks for i in res.increments)}")

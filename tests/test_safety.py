@@ -70,6 +70,11 @@ def test_killed_or_interrupted_run_keeps_its_increments(tmp_path, sig):
         assert info["status"] == "interrupted" and info["increments"] == len(rows)
         assert "Traceback" not in stderr and len(stderr.strip().splitlines()) == 1, stderr
         assert "interrupted" in stderr
+        # the checkpoint saved on the way out (the default interval between saves is longer than
+        # this run) is the last converged increment's, or the one before when the signal landed
+        # among that increment's writers, between the history's row and the checkpoint's copy
+        meta = json.loads((out / "checkpoint" / "meta.json").read_text())
+        assert len(rows) - 1 <= meta["increment"] <= len(rows) and meta["increment"] >= 4
 
 
 def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
@@ -126,7 +131,8 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
     where the parallel direct solver's round-off differs from run to run)."""
     import numpy as np
     out = tmp_path / "run"
-    p = subprocess.Popen(launch.command([*RUN, "ring", "--out", out, "--no-progress"], n=n),
+    p = subprocess.Popen(launch.command([*RUN, "ring", "--out", out, "--no-progress",
+                                         "--checkpoint-interval", "0"], n=n),
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=launch.ENV,
                          start_new_session=True)
     _wait_rows(p, out / "history.csv", 12)
@@ -158,3 +164,9 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
     assert len(files) == 37 and len(set(files)) == 37
     info = json.loads((out / "run.json").read_text())
     assert info["status"] == "completed" and info["first_contact_load"] == pytest.approx(6.6 / 72)
+    # the uninterrupted run with the default interval between checkpoints (longer than the run)
+    # saved its last increment when it ended, and nothing older is left
+    meta = json.loads((tmp_path / "full" / "checkpoint" / "meta.json").read_text())
+    assert meta["increment"] == 37
+    assert sorted(f.name for f in (tmp_path / "full" / "checkpoint").glob("state_*")) == \
+        [f"state_00037_rank{r}.npz" for r in range(n)]

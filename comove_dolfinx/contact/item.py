@@ -248,6 +248,26 @@ class Contact(Item):
         self._node_sdof = np.array([key.get(tuple(np.round(x, 12)), -1) for x in self._X], dtype=np.int64)
         s1 = fem.locate_dofs_topological(S1, fdim, facets)
         self._s1dofs = s1[s1 < S1.dofmap.index_map.size_local]
+        self._p1_to_s = self._p1_interpolation(S, S1, ctx.degree)
+
+    @staticmethod
+    def _p1_interpolation(S, S1, degree: int):
+        """(dofs of S, the two P1 dofs whose mean is their value) for the interpolation of a P1
+        field into the boundary fields' space S (P1 or P2: a vertex takes its value, an edge's
+        midpoint the mean of the edge's ends), in numpy: dolfinx's interpolation between two spaces
+        cost as much as the rest of the output. None for other degrees."""
+        if degree not in (1, 2):
+            return None
+        tdim = S.mesh.topology.dim
+        imap = S.mesh.topology.index_map(tdim)
+        n = imap.size_local + imap.num_ghosts
+        cs, c1 = compat.cell_dofs(S, n), compat.cell_dofs(S1, n)
+        # the P2 triangle's dofs: the vertices, then the edges opposite vertices 0, 1 and 2
+        ends = [(0, 0), (1, 1), (2, 2)] + ([(1, 2), (0, 2), (0, 1)] if degree == 2 else [])
+        dofs = np.concatenate([cs[:, k] for k in range(len(ends))])
+        a = np.concatenate([c1[:, i] for i, _ in ends])
+        b = np.concatenate([c1[:, j] for _, j in ends])
+        return dofs, a, b
 
     @property
     def nodes(self) -> np.ndarray:
@@ -300,7 +320,11 @@ class Contact(Item):
             g.x.array[:] = 0.0
             g.x.array[b] = vals[b] / m[b]
             g.x.scatter_forward()
-            f.interpolate(g)
+            if self._p1_to_s is None:
+                f.interpolate(g)
+            else:
+                dofs, ea, eb = self._p1_to_s
+                f.x.array[dofs] = 0.5 * (g.x.array[ea] + g.x.array[eb])
             f.x.array[self._off] = 0.0                # the interpolation reaches into the cells
             f.x.scatter_forward()
 

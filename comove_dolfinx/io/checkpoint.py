@@ -1,6 +1,7 @@
 """Checkpoints: the full state of a converged increment, to restart a run from it.
 
-The :class:`Checkpoint` writer saves, every ``every`` converged increments, into ``folder``:
+The :class:`Checkpoint` writer saves converged increments (every ``every``-th, at most one per
+``interval`` seconds, and the last one when the run ends) into ``folder``:
 ``state_NNNNN_rankR.npz`` (each rank's displacement, quadrature state, the items' state - friction
 history, obstacle positions, load factors -, the predictor's past states, and the iterate whose
 tangent Newton factorised last, rebuilt at a restart for the tangent predictor) and ``meta.json``
@@ -17,6 +18,7 @@ import io
 import json
 import os
 import pathlib
+import time
 
 import numpy as np
 
@@ -28,9 +30,10 @@ class CheckpointError(ValueError):
     """A checkpoint that cannot be used; the message names it and the fix."""
 
 
-def _owned(model, kind, arr):
-    """(key coordinates, values) of this rank's owned entries of a saved array."""
-    X = _local_coordinates(model, kind)
+def _owned(model, kind, arr, X=None):
+    """(key coordinates, values) of this rank's owned entries of a saved array (``X``: the local
+    coordinates of that kind, if known)."""
+    X = _local_coordinates(model, kind) if X is None else X
     if isinstance(kind, str) and kind == "V":
         n = model.V.dofmap.index_map.size_local
         return X[:n], np.asarray(arr).reshape(-1, 2)[:n]
@@ -51,35 +54,82 @@ def _local_coordinates(model, kind):
     return kind.tabulate_dof_coordinates()[:, :2]
 
 
+def _pack(arrays: dict) -> tuple[dict, np.ndarray]:
+    """Every array's bytes in one buffer, and where each lies (dtype, shape, offset): an archive of
+    two entries, where one entry per array cost more in the zip file's bookkeeping than the data."""
+    layout, chunks, offset = {}, [], 0
+    for name, a in arrays.items():
+        a = np.ascontiguousarray(a)
+        layout[name] = [a.dtype.str, list(a.shape), offset]
+        chunks.append(a.reshape(-1).view(np.uint8))
+        offset += a.nbytes
+    return layout, np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.uint8)
+
+
+def _unpack(layout: dict, data: np.ndarray) -> dict:
+    out = {}
+    for name, (dtype, shape, offset) in layout.items():
+        dt = np.dtype(dtype)
+        n = int(np.prod(shape, dtype=np.int64)) * dt.itemsize
+        out[name] = data[offset:offset + n].copy().view(dt).reshape(shape)
+    return out
+
+
 def _key(X: np.ndarray):
     return [tuple(k) for k in np.round(X, 9)]
 
 
 class Checkpoint(Writer):
-    def __init__(self, folder, every: int = 1):
+    """Saves the converged increments to go on from: every ``every`` increments, and no sooner than
+    ``interval`` seconds (wall time) after the last save; the newest converged increment is always
+    saved when the run ends (completed, stopped or interrupted), so a restart after an ordinary end
+    goes on from where the run stood, and after a kill -9 from at most ``interval`` seconds before
+    it. Each increment's state is taken (copied) when it converges; the files are written when a
+    save is due. ``interval = 0``: every ``every``-th increment, as it converges."""
+
+    def __init__(self, folder, every: int = 1, interval: float = 0.0):
         if not (isinstance(every, int) and every >= 1):
             raise CheckpointError(f"every = {every!r}: give a whole number >= 1")
-        self.folder, self.every = pathlib.Path(folder), every
+        if not (isinstance(interval, (int, float)) and 0.0 <= interval < float("inf")):
+            raise CheckpointError(f"interval = {interval!r}: give a number of seconds >= 0")
+        self.folder, self.every, self.interval = pathlib.Path(folder), every, float(interval)
         self.count = 0
 
     def open(self, run) -> None:
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
         self.count = len(run.resumed_rows)
         self._prev, self._ranks = None, run.comm.size
+        self._pending, self._saved_at = None, time.perf_counter()
 
     def write(self, run, row, increment) -> None:
         self.count += 1
+        self._pending = self._take(run, row["step"])
         if self.count % self.every:
             return
-        comm, n = run.comm, row["step"]
+        # the same decision on every rank (wall clocks differ): rank 0's
+        due = run.comm.bcast(time.perf_counter() - self._saved_at >= self.interval, root=0)
+        if due:
+            self._save(run.comm)
+
+    def close(self, run, results) -> None:
+        if self._pending is not None:
+            self._save(run.comm)
+
+    def _take(self, run, n: int) -> tuple:
+        """(increment, packed arrays of this rank, meta.json's text) of the converged increment that
+        the model holds (before it commits)."""
+        comm = run.comm
         m, solver, newton = run.model, run.solver, run.newton
-        arrays, kinds = {}, {}
+        arrays, kinds, coords = {}, {}, {}
 
         def put(name, value):
             if isinstance(value, tuple):              # (kind, local array): owned entries, keyed by position
                 kind, arr = value
-                X, vals = _owned(m, kind, arr)
                 tag = kind if isinstance(kind, str) else "S"
+                key = tag if isinstance(kind, str) else id(kind)
+                if key not in coords:
+                    coords[key] = _local_coordinates(m, kind)
+                X, vals = _owned(m, kind, arr, coords[key])
                 arrays[f"X{tag}"], arrays[name], kinds[name] = X, vals, tag
             else:
                 arrays[name] = np.asarray(value)
@@ -94,23 +144,28 @@ class Checkpoint(Writer):
             put(f"past{j}", ("V", u))
         if newton.factorised:
             put("u_factorised", ("V", newton.u_factorised))
-        name = self.folder / f"state_{n:05d}_rank{comm.rank}.npz"
-        tmp = name.with_name(f".{name.stem}.tmp.npz")
-
-        def save():
-            buf = io.BytesIO()                  # one write of the whole archive: a third of the time
-            np.savez(buf, **arrays)             # of np.savez's many small writes to the file
-            tmp.write_bytes(buf.getbuffer())
-            os.replace(tmp, name)
-        # every rank's file is complete before meta.json names it; a rank that cannot write (a full
-        # disk) fails the write on every rank instead of leaving the others waiting
-        collective(comm, save)
         meta = {"increment": n, "ranks": comm.size, "step_index": run.step_index,
                 "resume": {"t": rs["t"], "dt": rs["dt"], "step": rs["step"], "easy": rs["easy"],
                            "past_t": [t for t, _ in rs["past"]]},
                 "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
                 "rows": run.job_rows, "contact": run.contact_stats, "warnings": run.warnings, "kinds": kinds}
-        on_root(comm, self._commit, n, json.dumps(meta, default=float))
+        return n, _pack(arrays), json.dumps(meta, default=float)      # (packing copies the arrays)
+
+    def _save(self, comm) -> None:
+        n, (layout, data), meta = self._pending
+        name = self.folder / f"state_{n:05d}_rank{comm.rank}.npz"
+        tmp = name.with_name(f".{name.stem}.tmp.npz")
+
+        def save():
+            buf = io.BytesIO()                  # one write of the whole archive
+            np.savez(buf, layout=np.frombuffer(json.dumps(layout).encode(), dtype=np.uint8), data=data)
+            tmp.write_bytes(buf.getbuffer())
+            os.replace(tmp, name)
+        # every rank's file is complete before meta.json names it; a rank that cannot write (a full
+        # disk) fails the write on every rank instead of leaving the others waiting
+        collective(comm, save)
+        on_root(comm, self._commit, n, meta)
+        self._pending, self._saved_at = None, time.perf_counter()
 
     def _commit(self, n: int, text: str) -> None:
         write_atomic(self.folder / "meta.json", text)
@@ -138,8 +193,13 @@ def load(folder, comm) -> tuple[dict, list]:
     n = meta["increment"]
     parts = []
     for r in range(meta["ranks"]):
-        with np.load(folder / f"state_{n:05d}_rank{r}.npz") as f:
-            parts.append({k: f[k] for k in f.files})
+        path = folder / f"state_{n:05d}_rank{r}.npz"
+        try:
+            with np.load(path) as f:
+                parts.append(_unpack(json.loads(f["layout"].tobytes()), f["data"]))
+        except (OSError, ValueError, KeyError):
+            raise CheckpointError(f"{path}: missing or not a checkpoint of this version: run without "
+                                  "--restart") from None
     return meta, parts
 
 

@@ -88,6 +88,8 @@ class VTK(Writer):
     # -- each increment -------------------------------------------------------------------------
     def _gather_points(self, values: np.ndarray) -> np.ndarray | None:
         """Owned nodal values (n_own, k) of the displacement's numbering -> global array on rank 0."""
+        if self.comm.size == 1:
+            return values
         parts = self.comm.gather(values, root=0)
         if self.comm.rank != 0:
             return None
@@ -97,6 +99,8 @@ class VTK(Writer):
         return out
 
     def _gather_cells(self, values: np.ndarray) -> np.ndarray | None:
+        if self.comm.size == 1:
+            return values[: self.n_cells]
         parts = self.comm.gather(values[: self.n_cells], root=0)
         return np.concatenate(parts) if self.comm.rank == 0 else None
 

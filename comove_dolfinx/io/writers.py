@@ -5,6 +5,7 @@ import csv
 import json
 import os
 import pathlib
+import time
 
 import numpy as np
 from tqdm import tqdm
@@ -84,13 +85,15 @@ def write_atomic(path: pathlib.Path, text: str) -> None:
 class RunInfo(Writer):
     """``path`` (JSON): the job's parameters, outcome, increments, Newton iterations, timing and,
     with contact, the load at first contact and the largest penetration. Written when the run
-    starts (``"status": "running"``) and after every increment, so that a run that is killed leaves
-    a summary that says it is incomplete; at the end ``"status"`` is ``"completed"``, ``"stopped"``
-    (an increment could not be solved) or ``"interrupted"``."""
+    starts (``"status": "running"``) and after an increment at most every ``interval`` seconds, so
+    that a run that is killed leaves a summary that says it is incomplete and about how far it got
+    (history.csv has every increment); at the end ``"status"`` is ``"completed"``, ``"stopped"`` (an
+    increment could not be solved) or ``"interrupted"``."""
 
-    def __init__(self, path, parameters: dict | None = None):
-        self.path, self.parameters = pathlib.Path(path), parameters or {}
+    def __init__(self, path, parameters: dict | None = None, interval: float = 1.0):
+        self.path, self.parameters, self.interval = pathlib.Path(path), parameters or {}, interval
         self.rows = 0
+        self._written = -float("inf")
 
     def _info(self, run, status: str, message: str, results=None) -> str:
         info = {"parameters": self.parameters, "status": status, "completed": status == "completed",
@@ -108,8 +111,14 @@ class RunInfo(Writer):
 
     def write(self, run, row, increment) -> None:
         self.rows += 1
-        on_root(run.comm, write_atomic, self.path,
-                self._info(run, "running", f"converged up to increment {row['step']} (time {row['time']:.6g})"))
+        on_root(run.comm, self._running, run, row)
+
+    def _running(self, run, row) -> None:
+        if time.perf_counter() - self._written < self.interval:
+            return
+        write_atomic(self.path, self._info(
+            run, "running", f"converged up to increment {row['step']} (time {row['time']:.6g})"))
+        self._written = time.perf_counter()
 
     def close(self, run, results) -> None:
         status = ("completed" if results.completed else

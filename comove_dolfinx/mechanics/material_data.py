@@ -57,7 +57,11 @@ def ddot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def deviator(sig: ArrayLike) -> np.ndarray:
     """Deviatoric part of stored tensors (N, 4); zz takes part in the trace."""
     sig = np.asarray(sig, dtype=float)
-    return sig - (sig[..., :3].sum(axis=-1) / 3.0)[..., None] * ONE
+    mean = (sig[..., 0] + sig[..., 1] + sig[..., 2]) / 3.0
+    out = sig.copy()
+    for k in range(3):              # column by column: numpy is slow on short inner axes
+        out[..., k] -= mean
+    return out
 
 
 def von_mises(sig: ArrayLike) -> np.ndarray:

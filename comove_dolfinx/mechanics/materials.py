@@ -35,10 +35,18 @@ class PointUpdate:
 
     sig: np.ndarray                 # (N, 4) stress at the end of the increment
     p: np.ndarray                   # (N,) equivalent plastic strain
-    D: np.ndarray                   # (N, 4, 4) d sig / d sig_tr (sig depends on sig_rot through sig_tr only)
+    index: np.ndarray               # (k,) the points that yield
+    D: np.ndarray                   # (k, 4, 4) d sig / d sig_tr at those points (sig depends on sig_rot
+                                    # through sig_tr only); elsewhere return_maps.elastic_tangent(kind)
     ezz: np.ndarray | None = None   # plane stress: log thickness strain of the increment
     dezz_tr: np.ndarray | None = None    # (N, 4) its derivative by sig_tr
     dezz_rot: np.ndarray | None = None   # (N, 4) its derivative by sig_rot
+
+    def tangent(self, kind: str) -> np.ndarray:
+        """d sig / d sig_tr at every point, (N, 4, 4)."""
+        D = np.tile(rm.elastic_tangent(kind), (len(self.p), 1, 1))
+        D[self.index] = self.D
+        return D
 
 
 @dataclass(frozen=True)
@@ -61,7 +69,7 @@ class Plastic:
         out = self._update(sig_rot, sig_tr, p_n, kind)
         if kind == PLANE_STRESS:
             out.ezz, out.dezz_tr, out.dezz_rot = rm.plane_stress_thickness(
-                out.sig, sig_tr, sig_rot, out.D, self.elastic)
+                out.sig, sig_tr, sig_rot, out.D, self.elastic, out.index)
         return out
 
     def facet(self, sig_rot, sig_tr, p_n, kind: str, elastic=None):
@@ -91,8 +99,8 @@ class J2(Plastic):
         return self.hardening
 
     def _update(self, sig_rot, sig_tr, p_n, kind):
-        sig, p, D, _ = rm.j2_return(sig_tr, p_n, self.elastic, self.surface, kind)
-        return PointUpdate(sig, p, D)
+        ret = rm.j2_return_points(sig_tr, p_n, self.elastic, self.surface, kind)
+        return PointUpdate(ret.sig, ret.p, ret.index, ret.D)
 
     def _facet(self, sig_rot, sig_tr, p_n, kind, elastic):
         if kind == PLANE_STRESS:

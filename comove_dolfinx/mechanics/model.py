@@ -107,6 +107,8 @@ class Model:
         self.items = list(items)
         self.load = 0.0
         self.bcs: list = []
+        self._generation = 0                   # counts the changes of the converged state
+        self._evaluated = None                 # (key, u) of the state's last evaluation
 
     # shortcuts to the state (read by outputs and tests)
     @property
@@ -243,11 +245,19 @@ class Model:
         return f"det F = {worst:.3g} <= 0 at a node: an element folds (increment too large, or the body folds)"
 
     def evaluate_stress(self) -> None:
-        """Stress (and tangent) at every quadrature point for the current displacement iterate.
+        """Stress (and tangent) at every quadrature point for the current displacement iterate; nothing
+        to do when the state already holds this iterate's (the same u, converged state and elastic
+        constants: e.g. the predictor's residuals at two load factors, which differ in the items' terms).
+        The converged state changes through :meth:`commit` and :meth:`load_state` only.
 
         Raises, on every rank when it happens on any: :class:`InvertedElement` if det F <= 0 at a
         point, :class:`ReturnMapFailure` if the update is not defined (NaN) or the return map fails.
         """
+        key = (self._generation, float(self.constants.E.value), float(self.constants.nu.value))
+        same = self._evaluated is not None and self._evaluated[0] == key and \
+            np.array_equal(self._evaluated[1], self.u.x.array)
+        if self.comm.allreduce(same, op=MPI.LAND):
+            return                             # this iterate, from the same converged state
         err = None
         try:
             self.state.evaluate(self.rule.evaluate(self._eval))
@@ -255,7 +265,9 @@ class Model:
             err = e
         except Exception as e:                 # noqa: BLE001 - e.g. a return map that did not converge
             err = ReturnMapFailure(f"the constitutive update failed: {e}")
+        self._evaluated = None
         agree(self.comm, err)
+        self._evaluated = (key, self.u.x.array.copy())
 
     def commit(self) -> None:
         """Accept the current iterate as the converged state of the increment."""
@@ -263,6 +275,7 @@ class Model:
             item.commit()
         self.u_n.x.array[:] = self.u.x.array
         self.state.commit()
+        self._generation += 1
 
     # -- checkpoints ----------------------------------------------------------------------------
     def save_state(self) -> dict:
@@ -291,6 +304,7 @@ class Model:
         commit it. With ``u_factorised`` and ``matrix``, the tangent of that iterate is assembled
         first (against the old converged state, as Newton assembled it) into ``matrix``."""
         st = self.state
+        self._generation += 1
         self.u_n.x.array[:] = state["u_n"]
         for name in ("sigma_n", "p_n", "F22_n"):
             if name in state:

@@ -22,6 +22,8 @@ re-exported here.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -41,8 +43,8 @@ from .material_data import (
     von_mises,
 )
 
-__all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "chen_loading_surface", "deviator", "j2_return",
-           "plane_stress_thickness", "von_mises"]
+__all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "PointsReturn", "chen_loading_surface", "deviator",
+           "elastic_tangent", "j2_return", "j2_return_points", "plane_stress_thickness", "von_mises"]
 
 
 def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
@@ -75,29 +77,63 @@ def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Ha
     """
     check_model(model)
     sig_tr = as_points(sig_tr, "sig_tr")
-    p_n = np.broadcast_to(np.asarray(p_n, dtype=float), sig_tr.shape[:1]).copy()
     if model == "plane_stress":
         check_plane_stress(sig_tr, "sig_tr")
+    ret = j2_return_points(sig_tr, p_n, elastic, hardening, model)
+    D = np.tile(elastic_tangent(model), (len(ret.p), 1, 1))
+    D[ret.index] = ret.D
+    deps_p = np.zeros_like(sig_tr)
+    deps_p[ret.index] = ret.deps_p
+    return ret.sig, ret.p, D, deps_p
+
+
+def elastic_tangent(model: str) -> np.ndarray:
+    """d sig / d sig_tr at a point that does not yield: the identity (zz row and column zero in plane
+    stress)."""
+    return np.diag([1.0, 1.0, 0.0, 1.0]) if model == "plane_stress" else np.eye(4)
+
+
+@dataclass
+class PointsReturn:
+    """The return map at N points, its derivative and plastic strain stored only where they yield."""
+
+    sig: np.ndarray          # (N, 4) stress
+    p: np.ndarray            # (N,) equivalent plastic strain
+    index: np.ndarray        # (k,) the points that yield
+    D: np.ndarray            # (k, 4, 4) d sig / d sig_tr there (elsewhere elastic_tangent(model))
+    deps_p: np.ndarray       # (k, 4) plastic strain increment there (elsewhere 0)
+
+
+def j2_return_points(sig_tr: np.ndarray, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
+                     model: str) -> PointsReturn:
+    """:func:`j2_return` without its checks, with the tangent and the plastic strain increment only at
+    the points that yield (the model's stress evaluation calls it at every residual evaluation: most
+    points are elastic, and a full (N, 4, 4) tangent per call costs more than the return itself)."""
+    p_n = np.broadcast_to(np.asarray(p_n, dtype=float), sig_tr.shape[:1])
+    if model == "plane_stress":
         return _j2_plane_stress(sig_tr, p_n, elastic, hardening)
     s = deviator(sig_tr)
     q = np.sqrt(1.5 * ddot(s, s))
-    sig, p, deps_p = sig_tr.copy(), p_n.copy(), np.zeros_like(sig_tr)
-    D = np.tile(np.eye(4), (len(p), 1, 1))
     i = np.flatnonzero(q > hardening.sigma_y(p_n))
-    if i.size:
-        three_mu = 3.0 * elastic.mu
-        q_i = q[i]
-        dp, h = hardening.solve_dp(q_i, p_n[i], three_mu)
-        n = s[i] / q_i[:, None]
-        ratio = dp / q_i
-        sig[i] -= (three_mu * dp)[:, None] * n
-        p[i] += dp
-        deps_p[i] = 1.5 * dp[:, None] * n
-        theta = 1.0 - three_mu * ratio
-        c = 1.5 * three_mu * (1.0 / (three_mu + h) - ratio)
-        D[i] = (np.outer(ONE, ONE) / 3.0 + theta[:, None, None] * PDEV
-                - c[:, None, None] * n[:, :, None] * (WEIGHT * n)[:, None, :])
-    return sig, p, D, deps_p
+    sig, p = sig_tr.copy(), p_n.copy()
+    if i.size == 0:
+        return PointsReturn(sig, p, i, np.zeros((0, 4, 4)), np.zeros((0, 4)))
+    three_mu = 3.0 * elastic.mu
+    q_i, pn_i = q[i], p_n[i]
+    dp, h = hardening.solve_dp(q_i, pn_i, three_mu)
+    n = s[i] / q_i[:, None]
+    ratio = dp / q_i
+    sig[i] -= (three_mu * dp)[:, None] * n
+    p[i] = pn_i + dp
+    theta = 1.0 - three_mu * ratio
+    c = 1.5 * three_mu * (1.0 / (three_mu + h) - ratio)
+    # D = 1/3 (1 x 1) + theta P_dev - c n (x) W n, entry by entry (numpy is slow on short inner axes)
+    D = np.empty((i.size, 4, 4))
+    cn, wn = c[:, None] * n, WEIGHT * n
+    for a in range(4):
+        for b in range(4):
+            D[:, a, b] = ONE[a] * ONE[b] / 3.0 + theta * PDEV[a, b] - cn[:, a] * wn[:, b]
+    return PointsReturn(sig, p, i, D, 1.5 * dp[:, None] * n)
 
 
 def _plane_stress_segment(A, B, pn, c1, c2, hardening):
@@ -127,8 +163,7 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     """
     E, nu, G = elastic.E, elastic.nu, elastic.mu
     c1, c2 = E / (3.0 * (1.0 - nu)), 2.0 * G
-    sig, p, deps_p = sig_tr.copy(), p_n.copy(), np.zeros_like(sig_tr)
-    D = np.tile(np.diag([1.0, 1.0, 0.0, 1.0]), (len(p), 1, 1))
+    sig, p = sig_tr.copy(), p_n.copy()
     a_all = sig_tr[:, 0] + sig_tr[:, 1]
     b_all = sig_tr[:, 0] - sig_tr[:, 1]
     A_all = 0.25 * a_all ** 2                               # sigma_eq^2 = A f1^2 + B f2^2
@@ -137,7 +172,7 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     y_n = hardening.sigma_y(p_n)
     i = np.flatnonzero(q > y_n)
     if i.size == 0:
-        return sig, p, D, deps_p
+        return PointsReturn(sig, p, i, np.zeros((0, 4, 4)), np.zeros((0, 4)))
     a, b, t, A, B, q, y_n, pn = a_all[i], b_all[i], sig_tr[i, 3], A_all[i], B_all[i], q[i], y_n[i], p_n[i]
     p0, s0, h0 = hardening.segments
     seg = _plane_stress_segment(A, B, pn, c1, c2, hardening)
@@ -178,7 +213,6 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     out[:, 3] = t * f2
     sig[i] = out
     p[i] = pn + 2.0 / 3.0 * g * se
-    deps_p[i] = g[:, None] * deviator(out)
     # D = M(g) + (d sig / d g) (x) (d g / d sig_tr), d g / d sig_tr = -(d phi / d sig_tr) / phi'
     Di = np.zeros((len(g), 4, 4))
     Di[:, 0, 0] = Di[:, 1, 1] = 0.5 * (f1 + f2)
@@ -190,8 +224,7 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     dB = np.stack([1.5 * b, -1.5 * b, np.zeros_like(g), 6.0 * t], axis=1)
     dphi_dsig = (w / (2.0 * se))[:, None] * (f1[:, None] ** 2 * dA + f2[:, None] ** 2 * dB)
     Di += dsig_dg[:, :, None] * (-dphi_dsig / dphi[:, None])[:, None, :]
-    D[i] = Di
-    return sig, p, D, deps_p
+    return PointsReturn(sig, p, i, Di, g[:, None] * deviator(out))
 
 
 def chen_loading_surface(elastic: Elastic, hardening: Hardening) -> Hardening:
@@ -217,7 +250,8 @@ def chen_loading_surface(elastic: Elastic, hardening: Hardening) -> Hardening:
 
 
 def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndarray, D: np.ndarray,
-                           elastic: Elastic) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                           elastic: Elastic, index: np.ndarray | None = None
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Thickness strain of a plane-stress increment and its derivatives (any law with sigma_zz = 0).
 
     Both laws of this module end with sig = sig_tr - C_ps deps_p on the in-plane components, with a
@@ -228,7 +262,8 @@ def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndar
         ezz = -nu/E tr2(sig - sig_rot) - (1 - nu)/E tr2(sig_tr - sig),
 
     and F22 = F22_n exp(ezz). Its derivatives follow from D = d sig / d sig_tr (the return maps of this
-    module depend on sig_rot only through sig_tr).
+    module depend on sig_rot only through sig_tr): at every point, or with ``index`` at those points
+    only (elsewhere the elastic ``elastic_tangent("plane_stress")``, as :class:`PointsReturn` holds it).
 
     Returns
     -------
@@ -241,7 +276,11 @@ def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndar
     ezz = -nu / E * tr2(sig - sig_rot) - (1.0 - nu) / E * tr2(sig_tr - sig)
     e = np.array([1.0, 1.0, 0.0, 0.0])
     rows = lambda M: M[:, 0, :] + M[:, 1, :]       # noqa: E731  d tr2(sig) / d input
-    dtr = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
+    if index is None:
+        dtr = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
+    else:
+        dtr = np.tile(-nu / E * e, (len(sig), 1))                  # rows of the elastic tangent: e
+        dtr[index] = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
     drot = np.broadcast_to(nu / E * e, dtr.shape).copy()
     dtr[:, 2] = drot[:, 2] = 0.0
     return ezz, dtr, drot

@@ -17,6 +17,7 @@ import numpy as np
 from dolfinx import fem
 
 from .. import compat
+from . import return_maps as rm
 from .quadrature import CellInterpolator, QuadratureRule
 
 
@@ -38,7 +39,9 @@ class QuadratureState:
         self.sigma = r.function((4,), "sigma")
         self.p_n = r.function((), "p_n") if plastic else None
         self.p = r.function((), "p") if plastic else None
-        self.D = r.function((4, 4), "D") if plastic else None
+        # d sig / d sig_tr: elastic everywhere but at the points that yielded in the last evaluation
+        self.D = r.function((4, 4), "D", rm.elastic_tangent(kind)) if plastic else None
+        self._yielding = np.zeros(0, dtype=np.int64)
         self.F22_n = self.F22 = self.G_tr = self.G_rot = None
         if plastic and kind == "plane_stress":
             self.F22_n = r.function((), "F22_n", 1.0)
@@ -67,7 +70,10 @@ class QuadratureState:
             out = self.plastic.update(sig_rot, sig_tr, self.p_n.x.array, self.kind)
             view(self.sigma)[:] = out.sig
             self.p.x.array[:] = out.p
-            view(self.D)[:] = out.D
+            D = view(self.D)
+            D[self._yielding] = rm.elastic_tangent(self.kind)       # those of the last evaluation
+            D[out.index] = out.D
+            self._yielding = out.index
             if self.F22 is not None:
                 self.F22.x.array[:] = self.F22_n.x.array * np.exp(out.ezz)
                 view(self.G_tr)[:] = out.dezz_tr
