@@ -44,8 +44,8 @@ export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
 export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
-# one thread per process: OpenBLAS, and the OpenMP runtime that PETSc's libraries bring (its
-# threads spin on the other core and double the CPU time, README Parallel runs)
+# one thread per process (OpenBLAS, and the OpenMP runtime that Debian's PETSc links): ranks, not
+# threads, share the cores (README, Parallel runs)
 export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MPLBACKEND := Agg

@@ -9,8 +9,9 @@ floor: per ring size, the CPU time of one Newton iteration of the real run (the 
 ``--increments`` nominal increments, predictor, line searches, cut-backs and failed iterations
 included: run time / all iterations) against the floor on the same mesh and degree: assembling a
 linear-elastic stiffness matrix and residual (with the same lifting of the Dirichlet rows) and one
-MUMPS factorisation and solve (symbolic analysis done once, as in Newton). Also the run's residual
-evaluations per iteration and its Timer split; a cProfile listing of the largest size.
+MUMPS factorisation and solve (symbolic analysis done once, as in Newton), measured right after each
+run; the ratio is the median of the pairs' ratios. Also the run's residual evaluations per iteration
+and its Timer split; a cProfile listing of the largest size.
 solvers: per ring size and solver configuration (PETSc options under comove_), the CPU time of one
 factorisation and solve of the real tangent, and of the short run.
 scale: per scene, size and number of ranks (run once serial, once under mpirun, rows appended),
@@ -203,8 +204,10 @@ def _chart(path, series: dict, xlabel: str, ylabel: str, title: str, logy=True) 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    for label, (x, y, err) in series.items():
-        ax.errorbar(x, y, yerr=np.asarray(err) / 2, marker="o", capsize=3, label=label)
+    colours = plt.get_cmap("tab20").colors            # more series than the default ten colours
+    for k, (label, (x, y, err)) in enumerate(series.items()):
+        ax.errorbar(x, y, yerr=np.asarray(err) / 2, marker="osD^v<>"[k % 7], capsize=3, label=label,
+                    color=colours[(2 * k) % 20 if k < 10 else (2 * k + 1) % 20])
     ax.set_xscale("log")
     if logy:
         ax.set_yscale("log")
@@ -229,10 +232,16 @@ def _say(text: str) -> None:
 def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 4) -> list[dict]:
     rows = []
     for size in sizes:
-        runs = [short_run("ring", size, increments, count=True) for _ in range(repeats)]
+        # each run followed by a floor on its mesh: the ratio of each pair, so that the machine's
+        # speed drifting between runs (other virtual machines on the host: up to 2x over minutes
+        # here) does not enter the ratio
+        runs, floors = [], []
+        for _ in range(repeats):
+            runs.append(short_run("ring", size, increments, count=True))
+            floors.append(elastic_floor(runs[-1]["model"]))
         per_it = [r["cpu"] / max(r["iterations"], 1) for r in runs]
-        floors = [elastic_floor(runs[-1]["model"]) for _ in range(repeats)]
         fl = [f[0] for f in floors]
+        ratios = [a / b for a, b in zip(per_it, fl)]
         split = [float(np.median([f[1][k] for f in floors])) for k in range(3)]
         r = runs[-1]
         its = max(r["iterations"], 1)
@@ -241,7 +250,7 @@ def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int
                "increments": r["increments"], "residuals_per_it": round(r["residuals"] / its, 2)}
         row["iteration_cpu_s"], row["iteration_spread_s"] = _stats(per_it)
         row["floor_cpu_s"], row["floor_spread_s"] = _stats(fl)
-        row["ratio"] = row["iteration_cpu_s"] / row["floor_cpu_s"]
+        row["ratio"], row["ratio_spread"] = _stats(ratios)
         for k in ("solve", "jacobian", "assembly", "stress update", "force scale", "predictor"):
             row[f"{k.replace(' ', '_')}_s_per_it"] = t.get(k, 0.0) / its       # CPU, last run
         row["other_s_per_it"] = row["iteration_cpu_s"] - sum(
@@ -251,7 +260,7 @@ def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int
         rows.append(row)
         _say(f"ring size {size}: {row['dofs']} dofs, {row['iterations']} its, iteration "
              f"{row['iteration_cpu_s'] * 1e3:.1f} ms (+-{row['iteration_spread_s'] * 5e2:.1f}), floor "
-             f"{row['floor_cpu_s'] * 1e3:.1f} ms, ratio {row['ratio']:.2f}, "
+             f"{row['floor_cpu_s'] * 1e3:.1f} ms, ratio {row['ratio']:.2f} (+-{row['ratio_spread'] / 2:.2f}), "
              f"{row['residuals_per_it']} residuals/it")
     _write_csv(out / "floor.csv", rows)
     dofs = [r["dofs"] for r in rows]
