@@ -94,6 +94,7 @@ class Checkpoint(Writer):
             raise CheckpointError(f"interval = {interval!r}: give a number of seconds >= 0")
         self.folder, self.every, self.interval = pathlib.Path(folder), every, float(interval)
         self.count = 0
+        self._pending = None                 # (increment, packed arrays, meta) not yet on disk
 
     def open(self, run) -> None:
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
