@@ -170,3 +170,20 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
     assert meta["increment"] == 37
     assert sorted(f.name for f in (tmp_path / "full" / "checkpoint").glob("state_*")) == \
         [f"state_00037_rank{r}.npz" for r in range(n)]
+
+
+def test_checkpoint_arrays_keep_their_shape_and_type():
+    """The checkpoint's archive (all arrays in one buffer and their layout) gives back every array
+    as it was: 0-d numbers stay 0-d (a restart takes float() of them), and shapes and types hold."""
+    import numpy as np
+
+    from comove_dolfinx.io.checkpoint import _pack, _unpack
+    arrays = {"load": np.asarray(0.25), "i": np.asarray(7), "d": np.array([0.0, -0.1875]),
+              "X": np.arange(12.0).reshape(6, 2)[::2], "flags": np.array([True, False, True]),
+              "empty": np.zeros((0, 4))}
+    layout, data = _pack(arrays)
+    back = _unpack(layout, data)
+    assert set(back) == set(arrays)
+    for k, a in arrays.items():
+        assert back[k].shape == a.shape and back[k].dtype == a.dtype and np.array_equal(back[k], a), k
+    assert float(back["load"]) == 0.25

@@ -59,9 +59,9 @@ def _pack(arrays: dict) -> tuple[dict, np.ndarray]:
     two entries, where one entry per array cost more in the zip file's bookkeeping than the data."""
     layout, chunks, offset = {}, [], 0
     for name, a in arrays.items():
-        a = np.ascontiguousarray(a)
+        a = np.asarray(a)                    # (np.ascontiguousarray would make a 0-d array 1-d)
         layout[name] = [a.dtype.str, list(a.shape), offset]
-        chunks.append(a.reshape(-1).view(np.uint8))
+        chunks.append(np.ascontiguousarray(a).reshape(-1).view(np.uint8))
         offset += a.nbytes
     return layout, np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.uint8)
 
