@@ -159,15 +159,10 @@ def _run(args) -> int:
         _verbose(comm)
     signal.signal(signal.SIGTERM, _on_sigterm)
     signal.signal(signal.SIGINT, _on_sigint)         # some MPI builds reset Ctrl-C to the default
+    kw = dict(progress=not args.no_progress, overwrite=args.overwrite, restart=args.restart,
+              checkpoint_every=args.checkpoint_every, checkpoint_interval=args.checkpoint_interval)
     try:
-        if problem:
-            result = run_problem(args.scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
-                                 restart=args.restart, checkpoint_every=args.checkpoint_every,
-                                 checkpoint_interval=args.checkpoint_interval)
-        else:
-            result = run_scene(scene, args.out, progress=not args.no_progress, overwrite=args.overwrite,
-                               restart=args.restart, checkpoint_every=args.checkpoint_every,
-                                 checkpoint_interval=args.checkpoint_interval)
+        result = run_problem(args.scene, args.out, **kw) if problem else run_scene(scene, args.out, **kw)
     except errors as err:
         return fail(err)
     except KeyboardInterrupt as err:

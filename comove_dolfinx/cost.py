@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import cProfile
-import csv
 import dataclasses
 import io
 import logging
@@ -42,6 +41,7 @@ from .presets import get_scene
 from .solver import IncrementalSolver, Timer
 from .solver.linear import make_ksp, pushed
 from .solver.newton import Newton
+from .tables import read_table, write_table
 
 COMM = MPI.COMM_WORLD
 RING_SIZES = (0.22, 0.115, 0.058, 0.0365)          # about 1.4k, 5k, 20k and 50k dofs
@@ -79,19 +79,8 @@ def _stats(values) -> tuple[float, float]:
 
 
 def _write_csv(path: pathlib.Path, rows: list[dict], append: bool = False) -> None:
-    if COMM.rank != 0 or not rows:
-        return
-    new = not (append and path.exists())
-    with open(path, "a" if not new else "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        if new:
-            w.writeheader()
-        w.writerows(rows)
-
-
-def _read_csv(path: pathlib.Path) -> list[dict]:
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
+    if COMM.rank == 0:
+        write_table(path, rows, append=append)
 
 
 def build(name: str, size: float) -> tuple:
@@ -351,7 +340,7 @@ def scale(out: pathlib.Path, scenes=SCALE, repeats: int = 3, increments: int = 1
                      f"CPU {row['cpu_per_it_s']:.3f} s/it")
     _write_csv(out / "scale.csv", rows, append=True)
     if COMM.rank == 0:
-        every = _read_csv(out / "scale.csv")
+        every = read_table(out / "scale.csv")
         series = {}
         for r in every:
             key = f"{r['scene']} {r['solver']} {r['ranks']} rank(s)"

@@ -31,12 +31,18 @@ def test_pareto_front_keeps_the_undominated_runs():
     assert [r["id"] for r in report.pareto(rows)] == [0, 1, 4]
 
 
-def test_quantity_is_interpolated_at_the_load_level_or_read_at_the_end():
-    rows = [{"load": 0.5, "force": 10.0}, {"load": 1.5, "force": 30.0}]
+def test_quantity_is_interpolated_at_the_load_level_or_read_at_the_end(tmp_path):
+    """q read off a history file as the study reads it (led by the unloaded state)."""
+    from comove_dolfinx.tables import read_history, write_table
+    write_table(tmp_path / "h.csv", [{"load": 0.5, "force": 10.0}, {"load": 1.5, "force": 30.0}])
+    hist = read_history(tmp_path / "h.csv", origin=True)
     ring = ScenePlan("x", "force", 1.0, "P")
-    assert quantity(ring, rows) == pytest.approx(20.0)
-    assert math.isnan(quantity(ScenePlan("x", "force", 2.0, "P"), rows))
-    assert quantity(ScenePlan("x", "force", None, "P", sign=-1.0), rows) == -30.0
+    assert quantity(ring, hist) == pytest.approx(20.0)
+    assert quantity(ScenePlan("x", "force", 0.25, "P"), hist) == pytest.approx(5.0)   # from the origin
+    assert math.isnan(quantity(ScenePlan("x", "force", 2.0, "P"), hist))
+    assert quantity(ScenePlan("x", "force", None, "P", sign=-1.0), hist) == -30.0
+    write_table(tmp_path / "empty.csv", [], ["load", "force"])
+    assert math.isnan(quantity(ring, read_history(tmp_path / "empty.csv", origin=True)))
 
 
 def test_claim_table_finds_the_fewest_increments():

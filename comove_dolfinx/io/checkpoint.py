@@ -117,8 +117,9 @@ class Checkpoint(Writer):
             self._save(run.comm)
 
     def _take(self, run, n: int) -> tuple:
-        """(increment, packed arrays of this rank, meta.json's text) of the converged increment that
-        the model holds (before it commits)."""
+        """(increment, packed arrays of this rank, meta.json's content) of the converged increment
+        that the model holds (before it commits); the content is turned into text when it is saved
+        (the rows grow with the run: text at every increment would cost quadratic time)."""
         comm = run.comm
         m, solver, newton = run.model, run.solver, run.newton
         arrays, kinds, coords = {}, {}, {}
@@ -149,8 +150,9 @@ class Checkpoint(Writer):
                 "resume": {"t": rs["t"], "dt": rs["dt"], "step": rs["step"], "easy": rs["easy"],
                            "past_t": [t for t, _ in rs["past"]]},
                 "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
-                "rows": run.job_rows, "contact": run.contact_stats, "warnings": run.warnings, "kinds": kinds}
-        return n, _pack(arrays), json.dumps(meta, default=float)      # (packing copies the arrays)
+                "rows": list(run.job_rows), "contact": dict(run.contact_stats), "warnings": list(run.warnings),
+                "kinds": kinds}
+        return n, _pack(arrays), meta              # (packing copies the arrays; the lists are copied)
 
     def _save(self, comm) -> None:
         n, (layout, data), meta = self._pending
@@ -165,7 +167,7 @@ class Checkpoint(Writer):
         # every rank's file is complete before meta.json names it; a rank that cannot write (a full
         # disk) fails the write on every rank instead of leaving the others waiting
         collective(comm, save)
-        on_root(comm, self._commit, n, meta)
+        on_root(comm, self._commit, n, json.dumps(meta, default=float))
         self._pending, self._saved_at = None, time.perf_counter()
 
     def _commit(self, n: int, text: str) -> None:

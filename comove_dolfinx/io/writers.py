@@ -11,6 +11,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..parallel import on_root
+from ..tables import read_history  # noqa: F401 - exported by comove_dolfinx.io
 
 
 class Writer:
@@ -63,15 +64,6 @@ class HistoryCSV(Writer):
         if self._fh is not None:
             self._fh.close()
             self._fh = None
-
-
-def read_history(path, origin: bool = False) -> dict[str, np.ndarray]:
-    """A history CSV as columns; with ``origin`` led by the unloaded state (a row of zeros: no load,
-    displacement, force or contact), so that curves start where the body did."""
-    with open(path, newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    lead = [0.0] if origin else []
-    return {k: np.array(lead + [float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
 
 
 def write_atomic(path: pathlib.Path, text: str) -> None:

@@ -44,9 +44,7 @@ class PointUpdate:
 
     def tangent(self, kind: str) -> np.ndarray:
         """d sig / d sig_tr at every point, (N, 4, 4)."""
-        D = np.tile(rm.elastic_tangent(kind), (len(self.p), 1, 1))
-        D[self.index] = self.D
-        return D
+        return rm.full_tangent(self.index, self.D, len(self.p), kind)
 
 
 @dataclass(frozen=True)
@@ -69,7 +67,7 @@ class Plastic:
         out = self._update(sig_rot, sig_tr, p_n, kind)
         if kind == PLANE_STRESS:
             out.ezz, out.dezz_tr, out.dezz_rot = rm.plane_stress_thickness(
-                out.sig, sig_tr, sig_rot, out.D, self.elastic, out.index)
+                out.sig, sig_tr, sig_rot, out.index, out.D, self.elastic)
         return out
 
     def facet(self, sig_rot, sig_tr, p_n, kind: str, elastic=None):

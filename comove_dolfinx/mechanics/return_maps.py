@@ -44,7 +44,7 @@ from .material_data import (
 )
 
 __all__ = ["MODELS", "Elastic", "Hardening", "MaterialError", "PointsReturn", "chen_loading_surface", "deviator",
-           "elastic_tangent", "j2_return", "j2_return_points", "plane_stress_thickness", "von_mises"]
+           "elastic_tangent", "full_tangent", "j2_return", "j2_return_points", "plane_stress_thickness", "von_mises"]
 
 
 def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
@@ -80,8 +80,7 @@ def j2_return(sig_tr: ArrayLike, p_n: ArrayLike, elastic: Elastic, hardening: Ha
     if model == "plane_stress":
         check_plane_stress(sig_tr, "sig_tr")
     ret = j2_return_points(sig_tr, p_n, elastic, hardening, model)
-    D = np.tile(elastic_tangent(model), (len(ret.p), 1, 1))
-    D[ret.index] = ret.D
+    D = full_tangent(ret.index, ret.D, len(ret.p), model)
     deps_p = np.zeros_like(sig_tr)
     deps_p[ret.index] = ret.deps_p
     return ret.sig, ret.p, D, deps_p
@@ -91,6 +90,14 @@ def elastic_tangent(model: str) -> np.ndarray:
     """d sig / d sig_tr at a point that does not yield: the identity (zz row and column zero in plane
     stress)."""
     return np.diag([1.0, 1.0, 0.0, 1.0]) if model == "plane_stress" else np.eye(4)
+
+
+def full_tangent(index: np.ndarray, D: np.ndarray, n: int, model: str) -> np.ndarray:
+    """d sig / d sig_tr at all ``n`` points, (n, 4, 4), from its values ``D`` at the points ``index``
+    that yield (elsewhere :func:`elastic_tangent`)."""
+    out = np.tile(elastic_tangent(model), (n, 1, 1))
+    out[index] = D
+    return out
 
 
 @dataclass
@@ -249,9 +256,8 @@ def chen_loading_surface(elastic: Elastic, hardening: Hardening) -> Hardening:
     return Hardening(tuple(p0), tuple(stress), tail_slope=float(h_c[-1]))
 
 
-def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndarray, D: np.ndarray,
-                           elastic: Elastic, index: np.ndarray | None = None
-                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndarray, index: np.ndarray,
+                           D: np.ndarray, elastic: Elastic) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Thickness strain of a plane-stress increment and its derivatives (any law with sigma_zz = 0).
 
     Both laws of this module end with sig = sig_tr - C_ps deps_p on the in-plane components, with a
@@ -262,8 +268,8 @@ def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndar
         ezz = -nu/E tr2(sig - sig_rot) - (1 - nu)/E tr2(sig_tr - sig),
 
     and F22 = F22_n exp(ezz). Its derivatives follow from D = d sig / d sig_tr (the return maps of this
-    module depend on sig_rot only through sig_tr): at every point, or with ``index`` at those points
-    only (elsewhere the elastic ``elastic_tangent("plane_stress")``, as :class:`PointsReturn` holds it).
+    module depend on sig_rot only through sig_tr), given at the points ``index`` that yield (elsewhere
+    the elastic ``elastic_tangent("plane_stress")``, as :class:`PointsReturn` holds it).
 
     Returns
     -------
@@ -276,11 +282,8 @@ def plane_stress_thickness(sig: np.ndarray, sig_tr: np.ndarray, sig_rot: np.ndar
     ezz = -nu / E * tr2(sig - sig_rot) - (1.0 - nu) / E * tr2(sig_tr - sig)
     e = np.array([1.0, 1.0, 0.0, 0.0])
     rows = lambda M: M[:, 0, :] + M[:, 1, :]       # noqa: E731  d tr2(sig) / d input
-    if index is None:
-        dtr = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
-    else:
-        dtr = np.tile(-nu / E * e, (len(sig), 1))                  # rows of the elastic tangent: e
-        dtr[index] = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
+    dtr = np.tile(-nu / E * e, (len(sig), 1))                      # rows of the elastic tangent: e
+    dtr[index] = (1.0 - 2.0 * nu) / E * rows(D) - (1.0 - nu) / E * e
     drot = np.broadcast_to(nu / E * e, dtr.shape).copy()
     dtr[:, 2] = drot[:, 2] = 0.0
     return ezz, dtr, drot

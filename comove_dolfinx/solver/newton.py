@@ -142,13 +142,14 @@ class Newton(LineSearches):
             b.scale(-1.0)
         return b.norm()
 
-    def _solve_linear(self) -> str | None:
-        """Solve J du = -R into model.du; None, or why it failed (the same on every rank: an error
-        raised on one rank's part of the solve becomes every rank's failure)."""
+    def _solve(self, rhs: PETSc.Vec, x) -> str | None:
+        """Solve K x = rhs with the KSP's operator into the Function x; None, or why it failed (the
+        same on every rank: an error raised on one rank's part of the solve becomes every rank's
+        failure)."""
         err = None
         try:
             with linear.pushed(self.petsc_options):
-                self.ksp.solve(self.b, compat.petsc_vec(self.model.du))
+                self.ksp.solve(rhs, compat.petsc_vec(x))
         except PETSc.Error as e:
             err = e
         failure = first_failure(self.model.comm, err)
@@ -156,10 +157,16 @@ class Newton(LineSearches):
             reason = self.ksp.getConvergedReason()
             if reason < 0:
                 failure = f"the linear solver failed (PETSc KSP reason {reason})"
+        if failure is None:
+            x.x.scatter_forward()
+        return failure
+
+    def _solve_linear(self) -> str | None:
+        """Solve J du = -R into model.du; None, or why it failed."""
+        failure = self._solve(self.b, self.model.du)
         if failure is not None:
             self.factorised = False
             return f"linear solve: {failure}"
-        self.model.du.x.scatter_forward()
         return None
 
     def force_scale(self) -> float:
@@ -179,8 +186,7 @@ class Newton(LineSearches):
         """The residual test of the iterate after ``it`` corrections; with scale "force" against
         ||F_int|| of the current iterate."""
         s = self.settings
-        if s.monitor is not None:
-            self._notify("iteration", it, rnorm)
+        self._notify("iteration", it, rnorm)
         if s.scale == "force":
             with self.timer("force scale"):
                 self.residual_scale = self.force_scale()
@@ -190,8 +196,7 @@ class Newton(LineSearches):
         """Iterate from the current ``model.u``; returns (converged, iterations, reason), also to
         the settings' monitor."""
         ok, its, reason = self._iterate()
-        if self.settings.monitor is not None:
-            self._notify("solved", ok, its, reason)
+        self._notify("solved", ok, its, reason)
         return ok, its, reason
 
     def _iterate(self) -> tuple[bool, int, str]:
@@ -253,15 +258,8 @@ class Newton(LineSearches):
                 self.residual()
                 rhs.axpy(-1.0, self.b)          # b = -R: rhs = -(R(t + eps) - R(t))
                 rhs.scale(1.0 / eps)
-                err = None
-                try:
-                    with linear.pushed(self.petsc_options):
-                        self.ksp.solve(rhs, compat.petsc_vec(rate))
-                except PETSc.Error as e:
-                    err = e
-                if first_failure(m.comm, err) is not None or self.ksp.getConvergedReason() < 0:
+                if self._solve(rhs, rate) is not None:
                     return False
-                rate.x.scatter_forward()
         except (InvertedElement, ReturnMapFailure):
             m.set_load(t)
             return False

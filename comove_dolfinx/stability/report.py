@@ -1,11 +1,11 @@
 """What the map writes: the CSV files, the heat maps and the summary stability.md."""
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
 import pathlib
 
+from ..tables import read_table, write_table
 from .causes import SHORT
 
 
@@ -29,16 +29,12 @@ SCENES = ("elastica", "beam", "plate", "ring", "shear")
 
 
 def write_csv(path: pathlib.Path, rows: list[dict]) -> None:
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=FIELDS, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    """The map's columns (FIELDS), numbers to 6 significant digits."""
+    write_table(path, [{k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows],
+                FIELDS)
 
 
-def read_csv(path: pathlib.Path) -> list[dict]:
-    with open(path) as fh:
-        return list(csv.DictReader(fh))
+read_csv = read_table
 
 
 def _f(x) -> float:

@@ -5,10 +5,10 @@ Everything here works on the rows of runner.run_case (plain dicts), so it can be
 """
 from __future__ import annotations
 
-import csv
 import math
 import pathlib
 
+from ..tables import read_table, write_table
 from .plan import ScenePlan
 
 NAN = float("nan")
@@ -91,13 +91,7 @@ def claim_rows(plan: ScenePlan, rows: list[dict]) -> list[dict]:
 
 
 def write_csv(path: pathlib.Path, rows: list[dict]) -> None:
-    if not rows:
-        return
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_table(path, rows)
 
 
 def chart(plan: ScenePlan, rows: list[dict], ref: dict, path: pathlib.Path) -> None:
@@ -162,8 +156,7 @@ def read_rows(path: pathlib.Path) -> list[dict]:
                 return float(v)
             except ValueError:
                 return v
-    with open(path, newline="") as fh:
-        return [{k: num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+    return [{k: num(v) for k, v in r.items()} for r in read_table(path)]
 
 
 def _fmt(v, spec=".3g", unit=""):

@@ -8,7 +8,6 @@ of model compiles its forms, later ones find them in the JIT cache: the spread s
 """
 from __future__ import annotations
 
-import csv
 import json
 import os
 import pathlib
@@ -18,6 +17,9 @@ import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
+import numpy as np
+
+from ..tables import read_history
 from .plan import Case, ScenePlan
 
 
@@ -33,33 +35,32 @@ def _launch(scene: str, case: Case, folder: pathlib.Path) -> tuple[float, int]:
     return usage.ru_utime + usage.ru_stime, proc.returncode
 
 
-def _read(folder: pathlib.Path) -> tuple[dict, list[dict]]:
+def _read(folder: pathlib.Path) -> tuple[dict, dict]:
+    """(run.json, the history's columns led by the unloaded state), empty where unreadable."""
     try:
         info = json.loads((folder / "run.json").read_text())
     except (OSError, ValueError):
         info = {}
     try:
-        with open(folder / "history.csv") as fh:
-            rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+        history = read_history(folder / "history.csv", origin=True)
     except (OSError, ValueError):
-        rows = []
-    return info, rows
+        history = {}
+    return info, history
 
 
-def quantity(plan: ScenePlan, rows: list[dict]) -> float:
-    """q of a run: the column at the plan's load level (linear between increments), nan where the run
+def quantity(plan: ScenePlan, history: dict) -> float:
+    """q of a run from its history's columns (led by the unloaded state, tables.read_history with
+    ``origin``): the column at the plan's load level (linear between increments), nan where the run
     did not get there; or in the last row (the caller keeps it for completed runs only)."""
-    if not rows:
+    if len(history.get("load", ())) < 2:
         return float("nan")
+    y = history[plan.column]
     if plan.at is None:
-        return plan.sign * rows[-1][plan.column]
-    x = [0.0] + [r["load"] for r in rows]
-    y = [0.0] + [r[plan.column] for r in rows]
-    for k in range(1, len(x)):
-        if x[k] >= plan.at - 1e-12:
-            w = (plan.at - x[k - 1]) / (x[k] - x[k - 1])
-            return plan.sign * (y[k - 1] + w * (y[k] - y[k - 1]))
-    return float("nan")
+        return plan.sign * float(y[-1])
+    x = history["load"]
+    if x[-1] < plan.at - 1e-12:
+        return float("nan")
+    return plan.sign * float(np.interp(plan.at, x, y))
 
 
 def run_case(plan: ScenePlan, case: Case, out: pathlib.Path, repeat: int) -> dict:
@@ -70,11 +71,11 @@ def run_case(plan: ScenePlan, case: Case, out: pathlib.Path, repeat: int) -> dic
     for _ in range(repeat):
         cpu, code = _launch(plan.name, case, folder)
         cpus.append(cpu)
-    info, rows = _read(folder)
+    info, history = _read(folder)
     status = info.get("status", "crashed" if code else "unknown")
     its = info.get("newton_its", [])
     complete = status == "completed"
-    q = quantity(plan, rows) if complete or plan.at is not None else float("nan")
+    q = quantity(plan, history) if complete or plan.at is not None else float("nan")
     increments = len(its)
     cut = max(increments - _nominal(case, plan), 0)          # increments added by cut-backs
     return {"family": case.family, "x": case.x, "settings": " ".join(case.sets), "status": status,
