@@ -98,7 +98,7 @@ $(VENV)/.installed-pip: pyproject.toml | system
 venv: system $(STAMP)
 
 demo: venv
-	$(VENV)/bin/comove run beam --out results/beam
+	$(VENV)/bin/comove run beam --out results/beam --overwrite
 
 test: venv
 	@$(PY) -c "import comove_dolfinx, dolfinx; print('testing with dolfinx', dolfinx.__version__, '($(SOURCE))')"

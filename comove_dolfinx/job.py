@@ -222,7 +222,8 @@ class Job:
                 collective(comm, w.open, run)
         newton = Newton(model, self.newton, timer)
         run.newton = newton
-        bar = tqdm(total=len(self.steps), unit="step", disable=not progress or comm.rank != 0,
+        # the bar on rank 0 and only on a terminal (disable=None): a log file gets the console's lines
+        bar = tqdm(total=len(self.steps), unit="step", disable=True if not progress or comm.rank != 0 else None,
                    bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
         try:
             for k, step in enumerate(self.steps):

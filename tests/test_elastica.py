@@ -49,3 +49,12 @@ def test_one_and_two_ranks_give_the_same_history(tmp_path):
     for a, b in zip(*hist):
         for key in ("load", "tip_ux", "tip_uy", "newton_its"):
             assert b[key] == pytest.approx(a[key], rel=1e-9, abs=1e-12), key
+
+
+def test_progress_bar_only_on_a_terminal(tmp_path):
+    """Run as from a script or into a log (stdout and stderr are pipes here): the console's increment
+    lines and no progress bar (tqdm's bar would come out as one line per refresh, '...%|###...')."""
+    p = _cli(["run", "elastica", "--set", "n_steps=2", "--set", "lam=1", "--out", str(tmp_path / "run")])
+    assert p.returncode == 0, p.stderr
+    assert "%|" not in p.stderr + p.stdout
+    assert "step   2  load 1" in p.stdout
