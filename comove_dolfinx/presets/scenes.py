@@ -17,6 +17,14 @@ def _check_strip(scene) -> None:
         raise SceneError(f"L = {scene.L}, h = {scene.h}: both must be > 0")
 
 
+def _check_small_against_E(scene, name: str, value: float) -> None:
+    """A load or yield stress of the order of Young's modulus (a strain of 100 % or more from it
+    alone) is a units mistake, not a problem this model answers: refuse it before the run goes to NaN."""
+    if abs(value) >= scene.E:
+        raise SceneError(f"{name} = {value} is not small against E = {scene.E}: a stress of the order of "
+                         "Young's modulus strains the body by 100 % or more; check the units of both (kgf/cm^2)")
+
+
 def _strip_mesh(scene, comm, need):
     """The L x h rectangle of the cantilever scenes, or the user's mesh with the ``need`` tags."""
     from .build import geometry
@@ -87,6 +95,7 @@ class Beam(ContactScene):
     def validate(self):
         super().validate()
         _check_strip(self)
+        _check_small_against_E(self, "q_max", self.q_max)
 
     def mesh_data(self, comm):
         return _strip_mesh(self, comm, ("left", "top", "bottom"))
@@ -137,6 +146,7 @@ class Plate(ContactScene):
         if not (self.R > 0 and self.t > 0 and 0 < self.z_support < self.t):
             raise SceneError(f"R = {self.R}, t = {self.t}, z_support = {self.z_support}: need R, t > 0 "
                              "and 0 < z_support < t")
+        _check_small_against_E(self, "p_max", self.p_max)
 
     def mesh_data(self, comm):
         need = ("axis", "top", "bottom", "rim_support")
@@ -238,7 +248,7 @@ class Ring(ContactScene):
             raise SceneError(f"plane = {self.plane!r}: choose plane_strain or plane_stress")
         if self.update not in PLASTIC_UPDATES:
             raise SceneError(f"update = {self.update!r} cannot carry plasticity: use sr or hughes_winget")
-        self.table()
+        _check_small_against_E(self, "the initial yield stress", self.table().stress[0])
 
     def table(self) -> Hardening:
         return parse_table(self.hardening)
