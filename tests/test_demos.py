@@ -7,6 +7,7 @@ springs back and, pressed again without friction, carries its load again."""
 import csv
 import math
 import pathlib
+import re
 
 import launch
 import pytest
@@ -50,6 +51,11 @@ def test_ring_demo_above_rigid_plastic_and_same_on_two_ranks(tmp_path):
         assert row["force"] > P0 / math.sqrt(1 - (row["load"] / (2 * R)) ** 2), row
     # the zone leaves the crown: its inner edge moves off x = 0
     assert serial[-1]["zone_min"] > 1.0 and serial[0]["zone_min"] == pytest.approx(0.0, abs=1e-12)
+    # the lift-off printed (the crown's geometric gap opening for good, interpolated) falls between
+    # the last increment whose contact pressure still reaches the crown and the first that does not
+    split = float(re.search(r"crown lifts off at delta = ([0-9.]+)", out).group(1))
+    first_off = next(k for k, row in enumerate(serial) if row["zone_min"] > 1e-9)
+    assert serial[first_off - 1]["load"] - 1e-3 <= split < serial[first_off]["load"], out
     _, parallel = _demo("ring", tmp_path / "np2", n=2)
     assert len(parallel) == len(serial)
     for a, b in zip(serial, parallel):
