@@ -20,6 +20,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
 import comove_dolfinx as cm  # noqa: E402
@@ -81,15 +82,15 @@ if comm.rank == 0:
                   "plate: deformed section (mirrored)", mirror=True, xlabel="r [cm]", ylabel="z [cm]",
                   load_name="p [kgf/cm$^2$]", clip=99)
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), layout="constrained")
-    pp = res["load"]
-    axes[0].plot(pp, -res["center_uz"], "o-", ms=3, label="$-u_z$ at the centre")
+    pp = np.r_[0, res["load"]]                        # from the unloaded state
+    axes[0].plot(pp, -np.r_[0, res["center_uz"]], "o-", ms=3, label="$-u_z$ at the centre")
     axes[0].axhline(gap, color="grey", ls="--", lw=0.8, label="gap to the base")
     axes[0].plot([0, gap / w_mindlin * q1], [0, gap], ":", color="k", label="Mindlin, linear")
     axes[0].set(xlabel="p [kgf/cm$^2$]", ylabel="[cm]", title="centre deflection")
     axes[0].legend()
-    axes[1].plot(pp, res["contact_radius"], "o-", ms=3)
+    axes[1].plot(pp, np.r_[0, res["contact_radius"]], "o-", ms=3)
     axes[1].set(xlabel="p [kgf/cm$^2$]", ylabel="[cm]", title="contact radius (current)")
-    axes[2].plot(pp, res["contact_force"], "o-", ms=3)
+    axes[2].plot(pp, np.r_[0, res["contact_force"]], "o-", ms=3)
     axes[2].set(xlabel="p [kgf/cm$^2$]", ylabel="[kgf]", title="force on the base (whole plate)")
     fig.savefig(out / "plate_curves.png", dpi=130)
     plt.close(fig)

@@ -140,6 +140,11 @@ def snapshot_grid(snaps: list[Snapshot], obstacle, path, title: str, mirror: boo
         ax.set_ylabel(ylabel)
     for ax in axes[-1, :]:
         ax.set_xlabel(xlabel)
+    # the panels' height from their drawn extent (body and obstacles, equal axes), so that they fill
+    # the width: the estimate above leaves the panels of a flat body with blank space beside them
+    (x0, x1), (y0, y1) = axes[0, 0].get_xlim(), axes[0, 0].get_ylim()
+    panel = (width - 1.9) / columns                        # less the colour bar and the y labels
+    fig.set_size_inches(width, 0.7 + rows * (panel * (y1 - y0) / (x1 - x0) + 0.45))
     fig.suptitle(title)
     fig.colorbar(art, ax=axes.ravel().tolist(), label=snaps[0].label, shrink=0.8,
                  extend="max" if clip and vmax < vals.max() else "neither")
