@@ -242,10 +242,11 @@ class Contact(Item):
         self._sdofs = sdofs[sdofs < S.dofmap.index_map.size_local]
         self._off = np.ones(S.dofmap.index_map.size_local + S.dofmap.index_map.num_ghosts, dtype=bool)
         self._off[sdofs] = False                     # dofs away from the contact boundary
-        # the boundary field's dof at each of the boundary's nodes (same points, matched by position)
-        XS = S.tabulate_dof_coordinates()[:, :2]
-        key = {tuple(np.round(x, 12)): i for i, x in enumerate(XS)}
-        self._node_sdof = np.array([key.get(tuple(np.round(x, 12)), -1) for x in self._X], dtype=np.int64)
+        # the boundary field's dof at each of the boundary's nodes (same points, matched by position
+        # among the boundary's dofs, ghosts included)
+        XS = np.round(S.tabulate_dof_coordinates()[sdofs, :2], 12).tolist()
+        key = {tuple(x): int(d) for x, d in zip(XS, sdofs)}
+        self._node_sdof = np.array([key.get(tuple(x), -1) for x in np.round(self._X, 12).tolist()], dtype=np.int64)
         s1 = fem.locate_dofs_topological(S1, fdim, facets)
         self._s1dofs = s1[s1 < S1.dofmap.index_map.size_local]
         self._p1_to_s = self._p1_interpolation(S, S1, ctx.degree)
