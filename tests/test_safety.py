@@ -5,6 +5,7 @@ files with an earlier run's."""
 import csv
 import json
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -101,6 +102,12 @@ def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
     afile.write_text("x")
     bad = launch.run([*RUN, "elastica", "--out", afile, "--no-progress"])
     assert bad.returncode == 2 and "not a folder" in bad.stderr
+    # results without a checkpoint (as a run killed before its first save leaves them): --restart
+    # is refused with the way out, and the results are left as they were
+    shutil.rmtree(out / "checkpoint")
+    norestart = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--restart"])
+    assert norestart.returncode == 2 and "--overwrite instead of --restart" in norestart.stderr, norestart.stderr
+    assert len(_rows(out / "history.csv")) == 1
 
 
 def test_guards_stop_folding_and_warn_of_untrustworthy_results(tmp_path):

@@ -73,7 +73,11 @@ class RunFolder:
             g.name for pat in RESULT_GLOBS for g in p.glob(pat)]
         if self.restart:
             if not (p / "checkpoint" / "meta.json").exists():
-                raise FolderError(f"--out {p}: no checkpoint to restart from: run without --restart")
+                raise FolderError(
+                    f"--out {p}: no checkpoint to restart from" + (
+                        " (none was saved: a run killed within its first --checkpoint-interval seconds "
+                        "leaves none): run it again with --overwrite instead of --restart" if old else
+                        ": run without --restart"))
             old = []                                     # the run goes on where it stopped
         elif old and not self.overwrite:
             raise FolderError(f"--out {p}: holds the results of an earlier run ({', '.join(sorted(old)[:3])}"
