@@ -1,6 +1,6 @@
 """Unilateral contact with rigid obstacles, penalty or Nitsche, with lagged Coulomb friction."""
-from .item import FACET_DEGREE, Contact, ZoneInfo
 from ..names import CONTACT_METHODS as METHODS
+from .item import FACET_DEGREE, Contact, ZoneInfo
 from .obstacles import Circle, ContactError, Obstacle, Plane, Profile
 
 __all__ = ["FACET_DEGREE", "METHODS", "Circle", "Contact", "ContactError", "Obstacle", "Plane", "Profile",

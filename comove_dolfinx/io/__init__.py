@@ -5,8 +5,8 @@ increment)`` after every converged increment (before the state moves on) and ``c
 at the end, also after a failure. Every rank calls them; a failure on one rank stops all.
 """
 from .plots import Snapshots, draw_plane, snapshot_grid
-from .writers import Console, HistoryCSV, RunInfo, Writer, read_history
 from .vtk import VTK
+from .writers import Console, HistoryCSV, RunInfo, Writer, read_history
 from .xdmf import XDMF, FibreStress
 
 __all__ = ["VTK", "XDMF", "Console", "FibreStress", "HistoryCSV", "RunInfo", "Snapshots", "Writer", "draw_plane",

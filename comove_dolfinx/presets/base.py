@@ -9,11 +9,10 @@ probes and steps of a :class:`comove_dolfinx.Job` (``job``), with the public API
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
-from typing import ClassVar
-
 import math
 import os
+from dataclasses import dataclass
+from typing import ClassVar
 
 from ..mechanics.material_data import Elastic
 from ..names import CONTACT_METHODS as METHODS

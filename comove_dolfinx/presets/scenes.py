@@ -64,7 +64,7 @@ class Elastica(Scene):
         return self.lam
 
     def build(self, md):
-        from .build import (Body, Fixed, NodeDisplacement, Traction)
+        from .build import Body, Fixed, NodeDisplacement, Traction
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
         P = self.lam * self.E * self.h ** 3 / 12.0 / self.L ** 2      # lam = P L^2 / (E I)
         items = [Fixed("left"),
@@ -105,7 +105,7 @@ class Beam(ContactScene):
         return self.q_max
 
     def build(self, md):
-        from .build import (Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero)
+        from .build import Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
         items = [Fixed("left"), Pressure("top", self.q_max)]
         contact = self.contact_item("bottom", Plane((0.0, -self.gap), (0.0, 1.0)))
@@ -161,7 +161,7 @@ class Plate(ContactScene):
         return self.p_max
 
     def build(self, md):
-        from .build import (Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero)
+        from .build import Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
         items = [Fixed("axis", component=0),           # u_r = 0 on the axis of symmetry
                  Fixed("rim_support", component=1),    # lower part of the rim: u_z = 0, free in r

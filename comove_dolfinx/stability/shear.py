@@ -37,8 +37,9 @@ def simple_shear(update: str, gamma: float, n: int, max_cutbacks: int = 6, G: fl
     in n equal increments; returns the Results (columns gamma, s12, s11 = stresses / G, the mean
     over the quadrature points). ``monitor``: Newton's monitor (NewtonSettings.monitor), e.g. a
     :class:`Recorder`."""
-    import comove_dolfinx as cm
     from mpi4py import MPI
+
+    import comove_dolfinx as cm
     E = 2.0 * G * (1.0 + nu)
     md = _MESHES.get(size)
     if md is None:
