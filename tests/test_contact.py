@@ -177,8 +177,9 @@ def test_lagged_friction_with_nitsche_and_plasticity(block):
     is the contact law at the committed state (the stress of the last converged increment), so the
     friction is bounded by mu times the previous increment's normal force and, the contact slipping
     nearly everywhere, close to it (measured 0.9989 to 0.99999 of it, the shortfall where points at
-    the zone's edges stick; one and two ranks cut back differently). A lag state that followed the
-    current iterate would give mu times the current normal force: 0.6 to 9 % above the bound here."""
+    the zone's edges stick, on paths with different cut-backs: the path follows round-off). A lag
+    state that followed the current iterate would give mu times the current normal force, 0.6 to 13 %
+    away from the band on those paths."""
     mu = 0.3
     pull = Displacement("right", 0.05, component=0)
     pull.ramp(lambda t: max(0.0, 2 * t - 1))
@@ -190,7 +191,10 @@ def test_lagged_friction_with_nitsche_and_plasticity(block):
     _solve(m, 8, [lambda m, inc: forces.append(c.force())])
     assert m.comm.allreduce(float(m.p.x.array.max(initial=0.0)), op=MPI.MAX) > 1e-3   # yielded
     normal = [f[1] for f in forces]
-    assert all(b > a > 0 for a, b in zip(normal, normal[1:]))
+    assert all(n > 0 for n in normal)
+    # the normal force moves between sliding increments (up as the floor rises, down where the
+    # block flows plastically), so a friction that followed it would leave the band below
+    assert max(abs(b / a - 1) for a, b in zip(normal[5:], normal[6:])) > 0.01, normal
     for prev, now in zip(forces[5:], forces[6:]):                  # sliding increments
         assert 0.995 * mu * prev[1] < -now[0] < (1 + 1e-5) * mu * prev[1]
 
