@@ -88,7 +88,7 @@ collapsed = d >= 1.0
 ratio = P[collapsed] / bound[collapsed]
 crown_gap = (R_out - d / 2) - (R_out + res["crown_uy"])          # plate minus crown height
 # the crown lifts off where its gap opens for good (the last opening, interpolated between increments)
-in_contact = res["zone_max"] > 0                                  # NaN (no contact) compares False
+in_contact = np.isfinite(res["zone_min"])                         # NaN: no contact on the plate
 split = split_delta(d, crown_gap, in_contact)
 ok = res.completed and ratio.size > 0 and ratio.min() > 1.0
 

@@ -123,12 +123,9 @@ def snapshot_grid(snaps: list[Snapshot], obstacle, path, title: str, mirror: boo
     vmax = float(np.percentile(vals, clip)) if clip else float(vals.max())
     n = len(snaps)
     rows = -(-n // columns)
-    x = np.concatenate([s.xy[:, 0] for s in snaps])
-    y = np.concatenate([s.xy[:, 1] for s in snaps])
-    aspect = (np.ptp(y) + 1e-12) / (np.ptp(x) * (2 if mirror else 1) + 1e-12)
     width = 8.0 if columns == 1 else 4.5 * columns
-    fig, axes = plt.subplots(rows, columns, figsize=(width, 1.2 + rows * min(max(aspect, 0.25), 1.2) * 4.2),
-                             squeeze=False, sharex=True, sharey=True, layout="constrained")
+    fig, axes = plt.subplots(rows, columns, figsize=(width, 4.0), squeeze=False, sharex=True, sharey=True,
+                             layout="constrained")                # the height is set once drawn (below)
     art = None
     for ax, s in zip(axes.ravel(), snaps):
         art = draw(ax, s, vmin, vmax, mirror)
@@ -141,7 +138,7 @@ def snapshot_grid(snaps: list[Snapshot], obstacle, path, title: str, mirror: boo
     for ax in axes[-1, :]:
         ax.set_xlabel(xlabel)
     # the panels' height from their drawn extent (body and obstacles, equal axes), so that they fill
-    # the width: the estimate above leaves the panels of a flat body with blank space beside them
+    # the width without blank space beside or between them
     (x0, x1), (y0, y1) = axes[0, 0].get_xlim(), axes[0, 0].get_ylim()
     panel = (width - 1.9) / columns                        # less the colour bar and the y labels
     fig.set_size_inches(width, 0.7 + rows * (panel * (y1 - y0) / (x1 - x0) + 0.45))
