@@ -18,7 +18,10 @@ its message; the results hold every increment converged before.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -242,7 +245,7 @@ class Job:
                     t = k + inc.load
                     row = {"step": len(res.rows) + 1, "time": t,
                            "load": self.load(t) if self.load is not None else t}
-                    with timer("probes and checks"):
+                    with _interrupts_deferred(), timer("probes and checks"):
                         for p in self.probes:
                             row.update(collective(comm, p, model))
                         row.update(newton_its=inc.newton_its, wall_s=inc.wall_s)
@@ -254,9 +257,9 @@ class Job:
                         self._guards(run, row, contacts, stats)
                         res.rows.append(row)
                         res.increments.append(inc)
-                    with timer("output"):
-                        for w in self.writers:
-                            collective(comm, w.write, run, row, inc)
+                        with timer("output"):
+                            for w in self.writers:
+                                collective(comm, w.write, run, row, inc)
                     bar.update(inc.load - last)
                     last = inc.load
                 if not rr.completed:
@@ -317,3 +320,31 @@ class Job:
                     f"penetration: {pen:.3g} at increment {row['step']} is {100 * pen / h:.0f} % of the smallest "
                     "element: raise gamma0, use nitsche, or refine the mesh")
 
+
+@contextlib.contextmanager
+def _interrupts_deferred():
+    """Ctrl-C and SIGTERM, where Python handles them, wait until the block ends: a converged
+    increment goes to the results and to every writer (history row, dataset, checkpoint), or to
+    none, so the files an interrupted run leaves agree on its last increment. Signals whose
+    handler is not Python's (SIG_DFL, SIG_IGN) and other threads are left alone."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught, saved = [], {}
+
+    def hold(signum, frame):
+        caught.append(signum)
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if callable(signal.getsignal(sig)):
+            saved[sig] = signal.signal(sig, hold)
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            if signal.getsignal(sig) is hold:          # a writer may have installed its own since
+                signal.signal(sig, handler)
+    for signum in caught[:1]:                          # (an exception from the block goes first)
+        handler = signal.getsignal(signum)
+        if callable(handler):
+            handler(signum, None)

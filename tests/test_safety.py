@@ -51,7 +51,7 @@ def _check_readable(out):
         assert "displacement" in m.point_data and "plastic_strain_cell_avg" in m.cell_data
     for r in rows:
         assert all(v not in (None, "") for v in r.values()), r
-    return rows, json.loads((out / "run.json").read_text())
+    return rows, json.loads((out / "run.json").read_text()), files
 
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT])
@@ -61,7 +61,7 @@ def test_killed_or_interrupted_run_keeps_its_increments(tmp_path, sig):
     _wait_rows(p, out / "history.csv", 4)
     p.send_signal(sig)
     stdout, stderr = p.communicate(timeout=120)
-    rows, info = _check_readable(out)
+    rows, info, files = _check_readable(out)
     assert not info["completed"]
     if sig == signal.SIGKILL:
         assert p.returncode == -signal.SIGKILL
@@ -71,11 +71,11 @@ def test_killed_or_interrupted_run_keeps_its_increments(tmp_path, sig):
         assert info["status"] == "interrupted" and info["increments"] == len(rows)
         assert "Traceback" not in stderr and len(stderr.strip().splitlines()) == 1, stderr
         assert "interrupted" in stderr
-        # the checkpoint saved on the way out (the default interval between saves is longer than
-        # this run) is the last converged increment's, or the one before when the signal landed
-        # among that increment's writers, between the history's row and the checkpoint's copy
+        # a signal waits while an increment goes to the writers, so the files agree on the last
+        # increment: its row, its dataset and the checkpoint saved on the way out (the default
+        # interval between saves is longer than this run)
         meta = json.loads((out / "checkpoint" / "meta.json").read_text())
-        assert len(rows) - 1 <= meta["increment"] <= len(rows) and meta["increment"] >= 4
+        assert len(rows) >= 4 and len(files) == len(rows) and meta["increment"] == len(rows)
 
 
 def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
@@ -194,3 +194,35 @@ def test_checkpoint_arrays_keep_their_shape_and_type():
     for k, a in arrays.items():
         assert back[k].shape == a.shape and back[k].dtype == a.dtype and np.array_equal(back[k], a), k
     assert float(back["load"]) == 0.25
+
+
+def test_a_signal_waits_until_the_increment_is_written():
+    """Ctrl-C arriving while a converged increment goes to the writers (here sent by the first
+    writer itself) ends the run only after the last writer has it: the files of an interrupted run
+    never disagree on its last increment. Without the wait the second writer misses increment 2."""
+    import comove_dolfinx as cm
+    from comove_dolfinx.io import Writer
+
+    class Kick(Writer):
+        def write(self, run, row, inc):
+            if row["step"] == 2:
+                os.kill(os.getpid(), signal.SIGINT)
+
+    class Record(Writer):
+        def __init__(self):
+            self.steps, self.closed = [], None
+
+        def write(self, run, row, inc):
+            self.steps.append(row["step"])
+
+        def close(self, run, results):
+            self.closed = (results.interrupted, len(results.rows))
+
+    mesh = cm.rectangle(2.0, 0.5, 0.5, order=1)
+    body = cm.Body(mesh, "plane_strain", cm.Elastic(100.0, 0.3), update="svk", degree=1)
+    record = Record()
+    job = cm.Job(body, [cm.Fixed("left"), cm.Displacement("right", 0.01, component=0)], [cm.Step(5)],
+                 writers=[Kick(), record])
+    with pytest.raises(KeyboardInterrupt):
+        job.run()
+    assert record.steps == [1, 2] and record.closed == (True, 2)
