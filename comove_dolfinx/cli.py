@@ -115,9 +115,9 @@ def _on_sigint(signum, frame):
 
 
 def _signal_writer():
-    """A writer that (re)installs the command's SIGTERM and Ctrl-C handlers at every increment:
-    some MPI and PETSc builds reset Ctrl-C to the default (the process dies without a word) when
-    their solvers start."""
+    """A writer that (re)installs the command's SIGTERM and Ctrl-C handlers at every increment: code
+    of a problem file may reset Ctrl-C to the system's default (the process dies without a word), as
+    gmsh's Python API does (the package's own gmsh calls keep the handler: geometry/gmsh_session.py)."""
     import signal
 
     from .io import Writer

@@ -4,10 +4,10 @@ from __future__ import annotations
 import math
 import os
 
-import gmsh
 import numpy as np
 from mpi4py import MPI
 
+from .gmsh_session import gmsh
 from .meshes import _ARRANGEMENT, BODY_TAG, MeshData, _add_group, _build
 
 

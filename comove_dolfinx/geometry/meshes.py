@@ -9,11 +9,13 @@ from dataclasses import dataclass, field
 from typing import Callable, Iterable
 
 import dolfinx
-import gmsh
 import numpy as np
 from mpi4py import MPI
 
 from .. import compat
+from .gmsh_session import gmsh
+from .gmsh_session import start as _start_gmsh
+from .gmsh_session import stop as _stop_gmsh
 
 BODY_TAG = 1
 """Cell tag value of the physical surface "body" written by every builder."""
@@ -75,12 +77,6 @@ def _cache_path(builder: str, params: dict, cache_dir: str | os.PathLike) -> pat
     return pathlib.Path(cache_dir) / f"{builder}_{digest}.msh"
 
 
-def _start_gmsh() -> None:
-    """Initialize gmsh without user configuration files and with terminal output off."""
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)  # errors still raise, with gmsh's message
-
-
 def _add_group(dim: int, entities: list[int], tag: int, name: str) -> None:
     """Add the physical group `tag` of dimension `dim` with the given name."""
     gmsh.model.addPhysicalGroup(dim, entities, tag)  # gmsh 4.8: no name argument yet
@@ -110,7 +106,7 @@ def _build(builder: str, params: dict, construct: Callable[[], None], comm: MPI.
         except Exception as err:  # gmsh raises plain Exception
             error = f"building {path} with gmsh failed: {err}"
         finally:
-            gmsh.finalize()
+            _stop_gmsh()
             if tmp.exists():
                 tmp.unlink()
     error = comm.bcast(error, root=0)  # also the barrier: no rank reads before the file exists
@@ -187,7 +183,7 @@ def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
             except Exception as err:
                 error = f"gmsh cannot read {path}: {err}"
             if error is not None:
-                gmsh.finalize()
+                _stop_gmsh()
     error, facet_names, cell_names = comm.bcast((error, facet_names, cell_names), root=0)
     if error is not None:
         raise MeshError(error)
@@ -197,7 +193,7 @@ def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
         mesh, cell_tags, facet_tags = compat.model_to_mesh(gmsh.model, comm, 0, gdim=2)
     finally:
         if comm.rank == 0:
-            gmsh.finalize()
+            _stop_gmsh()
     fix_coordinate_element(mesh)
     mesh.name = "mesh"
     cell_tags.name, facet_tags.name = "cell_tags", "facet_tags"
