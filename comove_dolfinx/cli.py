@@ -115,18 +115,17 @@ def _on_sigint(signum, frame):
 
 
 def _signal_writer():
-    """A writer that (re)installs the command's SIGTERM and Ctrl-C handlers at every increment: code
-    of a problem file may reset Ctrl-C to the system's default (the process dies without a word), as
-    gmsh's Python API does (the package's own gmsh calls keep the handler: geometry/gmsh_session.py)."""
+    """A writer that installs the command's SIGTERM and Ctrl-C handlers when the run starts (after
+    the problem is built): code of a problem file may have reset Ctrl-C to the system's default (the
+    process dies without a word), as gmsh's Python API does (the package's own gmsh calls keep the
+    handler: geometry/gmsh_session.py). While the increments run, the job turns these handlers'
+    signals into a decision of all ranks (parallel.Interrupts)."""
     import signal
 
     from .io import Writer
 
     class Signals(Writer):
         def open(self, run):
-            self.write(run, None, None)
-
-        def write(self, run, row, increment):
             signal.signal(signal.SIGTERM, _on_sigterm)
             signal.signal(signal.SIGINT, _on_sigint)
     return Signals()
@@ -158,7 +157,7 @@ def _run(args) -> int:
     if args.verbose:
         _verbose(comm)
     signal.signal(signal.SIGTERM, _on_sigterm)
-    signal.signal(signal.SIGINT, _on_sigint)         # some MPI builds reset Ctrl-C to the default
+    signal.signal(signal.SIGINT, _on_sigint)
     kw = dict(progress=not args.no_progress, overwrite=args.overwrite, restart=args.restart,
               checkpoint_every=args.checkpoint_every, checkpoint_interval=args.checkpoint_interval)
     try:

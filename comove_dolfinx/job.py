@@ -18,10 +18,7 @@ its message; the results hold every increment converged before.
 """
 from __future__ import annotations
 
-import contextlib
 import os
-import signal
-import threading
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -32,7 +29,7 @@ from tqdm import tqdm
 
 from .mechanics.model import Model
 from .names import PREDICTORS
-from .parallel import collective
+from .parallel import Interrupts, collective
 from .solver import (
     Increment,
     IncrementalSolver,
@@ -229,51 +226,55 @@ class Job:
         bar = tqdm(total=len(self.steps), unit="step", disable=True if not progress or comm.rank != 0 else None,
                    bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
         try:
-            for k, step in enumerate(self.steps):
-                if saved is not None and k < saved[0]["step_index"]:
-                    continue                               # done before the checkpoint
-                step.start(self.items)
-                solver = IncrementalSolver(model, step.settings(), newton)
-                run.solver, run.step_index = solver, k
-                resume = None
-                if saved is not None:
-                    from .io import checkpoint
-                    resume = checkpoint.restore(*saved, model, newton)
-                    saved = None
-                rr, last = RunResult(), 0.0
-                for inc in solver.increments(rr, resume):
-                    t = k + inc.load
-                    row = {"step": len(res.rows) + 1, "time": t,
-                           "load": self.load(t) if self.load is not None else t}
-                    with _interrupts_deferred(), timer("probes and checks"):
-                        for p in self.probes:
-                            row.update(collective(comm, p, model))
-                        row.update(newton_its=inc.newton_its, wall_s=inc.wall_s)
-                        for c in contacts:
-                            z = c.zone()
-                            stats["max_penetration"] = max(stats["max_penetration"], z.max_penetration)
-                            if z.in_contact and stats["first_contact_load"] is None:
-                                stats["first_contact_load"] = row["load"]
-                        self._guards(run, row, contacts, stats)
-                        res.rows.append(row)
-                        res.increments.append(inc)
+            with Interrupts(comm) as interrupts:      # (parallel.py)
+                newton.poll = interrupts.check
+                for k, step in enumerate(self.steps):
+                    if saved is not None and k < saved[0]["step_index"]:
+                        continue                               # done before the checkpoint
+                    step.start(self.items)
+                    solver = IncrementalSolver(model, step.settings(), newton)
+                    run.solver, run.step_index = solver, k
+                    resume = None
+                    if saved is not None:
+                        from .io import checkpoint
+                        resume = checkpoint.restore(*saved, model, newton)
+                        saved = None
+                    rr, last = RunResult(), 0.0
+                    for inc in solver.increments(rr, resume):
+                        t = k + inc.load
+                        row = {"step": len(res.rows) + 1, "time": t,
+                               "load": self.load(t) if self.load is not None else t}
+                        with timer("probes and checks"):
+                            for p in self.probes:
+                                row.update(collective(comm, p, model))
+                            row.update(newton_its=inc.newton_its, wall_s=inc.wall_s)
+                            for c in contacts:
+                                z = c.zone()
+                                stats["max_penetration"] = max(stats["max_penetration"], z.max_penetration)
+                                if z.in_contact and stats["first_contact_load"] is None:
+                                    stats["first_contact_load"] = row["load"]
+                            self._guards(run, row, contacts, stats)
+                            res.rows.append(row)
+                            res.increments.append(inc)
                         with timer("output"):
                             for w in self.writers:
                                 collective(comm, w.write, run, row, inc)
-                    bar.update(inc.load - last)
-                    last = inc.load
-                if not rr.completed:
-                    name = f" {step.name!r}" if step.name else ""
-                    res.message = f"step {k + 1}{name}: {rr.message}" if len(self.steps) > 1 else rr.message
-                    break
-            else:
-                res.completed = True
-                res.message = f"completed {len(res.rows)} increments"
+                        interrupts.check()
+                        bar.update(inc.load - last)
+                        last = inc.load
+                    if not rr.completed:
+                        name = f" {step.name!r}" if step.name else ""
+                        res.message = f"step {k + 1}{name}: {rr.message}" if len(self.steps) > 1 else rr.message
+                        break
+                else:
+                    res.completed = True
+                    res.message = f"completed {len(res.rows)} increments"
         except KeyboardInterrupt as err:
-            res.interrupted = True
+            res.completed, res.interrupted = False, True
             res.message = f"interrupted ({err or 'Ctrl-C'}) after {len(res.rows)} converged increments"
             raise
         finally:
+            newton.poll = None
             bar.close()
             res.wall_s = time.perf_counter() - t_start
             self._account(res, timer, before)
@@ -320,31 +321,3 @@ class Job:
                     f"penetration: {pen:.3g} at increment {row['step']} is {100 * pen / h:.0f} % of the smallest "
                     "element: raise gamma0, use nitsche, or refine the mesh")
 
-
-@contextlib.contextmanager
-def _interrupts_deferred():
-    """Ctrl-C and SIGTERM, where Python handles them, wait until the block ends: a converged
-    increment goes to the results and to every writer (history row, dataset, checkpoint), or to
-    none, so the files an interrupted run leaves agree on its last increment. Signals whose
-    handler is not Python's (SIG_DFL, SIG_IGN) and other threads are left alone."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught, saved = [], {}
-
-    def hold(signum, frame):
-        caught.append(signum)
-
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        if callable(signal.getsignal(sig)):
-            saved[sig] = signal.signal(sig, hold)
-    try:
-        yield
-    finally:
-        for sig, handler in saved.items():
-            if signal.getsignal(sig) is hold:          # a writer may have installed its own since
-                signal.signal(sig, handler)
-    for signum in caught[:1]:                          # (an exception from the block goes first)
-        handler = signal.getsignal(signum)
-        if callable(handler):
-            handler(signum, None)

@@ -5,11 +5,14 @@ parallel file write) leaves them waiting for ever. Every piece of work that runs
 or that can fail on some ranks only (the return map at the rank's quadrature points, a file written
 by rank 0, a user's callback), goes through :func:`collective` or :func:`on_root`: the outcome is
 gathered, and if any rank failed, every rank raises the first failing rank's exception (the same type
-and message; :class:`RankFailure` if it cannot be sent).
+and message; :class:`RankFailure` if it cannot be sent). A signal (Ctrl-C, SIGTERM) that reaches
+the ranks at different moments is made one decision too: :class:`Interrupts`.
 """
 from __future__ import annotations
 
 import pickle
+import signal
+import threading
 from typing import Any, Callable
 
 from mpi4py import MPI
@@ -80,3 +83,56 @@ def on_root(comm: MPI.Comm, fn: Callable[..., Any], *args, **kwargs) -> Any:
             err = e
     agree(comm, err)
     return comm.bcast(result, root=0) if comm.size > 1 else result
+
+
+class Interrupts:
+    """Ctrl-C and SIGTERM while a job runs, as a decision of all ranks at the same point.
+
+    Inside the ``with`` block a signal whose handler is Python's is recorded instead of raised
+    where it lands (in one rank's collective call, or between two writers of an increment).
+    :meth:`check`, called by every rank at the same points (each Newton iteration, after each
+    increment's writers, and when the block ends), then calls the recorded signal's own handler
+    (KeyboardInterrupt, or the command's) on every rank as soon as any rank has one. So the ranks
+    stop together, and an increment goes to all its writers or to none. Signals whose handler is
+    not Python's (SIG_DFL, SIG_IGN), and blocks outside the main thread, are left alone."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self, comm: MPI.Comm):
+        self.comm, self.pending, self._saved = comm, 0, {}
+
+    def _hold(self, signum, frame) -> None:
+        self.pending = self.pending or int(signum)
+
+    def __enter__(self) -> "Interrupts":
+        self.pending = 0
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                if callable(signal.getsignal(sig)):
+                    self._saved[sig] = signal.signal(sig, self._hold)
+        return self
+
+    def _restore(self) -> None:
+        for sig, handler in self._saved.items():
+            if signal.getsignal(sig) == self._hold:
+                signal.signal(sig, handler)
+        self._saved.clear()
+
+    def check(self) -> None:
+        """Collective: the recorded signal's handler on every rank once any rank has one (the
+        larger number if two ranks got different ones: SIGTERM before Ctrl-C)."""
+        signum = self.pending if self.comm.size == 1 else self.comm.allreduce(self.pending, op=MPI.MAX)
+        if signum:
+            self._restore()
+            self.pending = 0
+            handler = signal.getsignal(signum)
+            if callable(handler):
+                handler(signum, None)
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        try:
+            if exc_type is None:
+                self.check()          # every rank ends the block here: still one decision
+        finally:
+            self._restore()
+        return False

@@ -110,3 +110,55 @@ def test_linear_solve_failure_on_one_rank_cuts_back_on_both(tmp_path):
     assert p.returncode == 0, p.stderr
     assert r0 == r1
     assert "completed=True" in r0 and "cutbacks=1" in r0
+
+
+INTERRUPT = """
+import logging, os, signal, sys
+logging.disable(logging.INFO)
+from mpi4py import MPI
+import comove_dolfinx as cm
+from comove_dolfinx.io import Writer
+comm = MPI.COMM_WORLD
+signal.signal(signal.SIGINT, signal.default_int_handler)
+
+class Kick:
+    # Ctrl-C on rank 1 only, after the first correction of increment 3
+    def __init__(self):
+        self.increments = 0
+    def iteration(self, newton, it, rnorm):
+        if comm.rank == 1 and self.increments == 2 and it == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+    def solved(self, newton, ok, its, reason):
+        self.increments += ok
+
+class Record(Writer):
+    def __init__(self):
+        self.steps, self.closed = [], None
+    def write(self, run, row, inc):
+        self.steps.append(row["step"])
+    def close(self, run, results):
+        self.closed = results.message
+
+md = cm.rectangle(1.0, 0.5, 0.125, order=2, comm=comm, cache_dir=sys.argv[1])
+body = cm.Body(md, "plane_strain", cm.J2(1000.0, 0.3, cm.Hardening.linear(15.0, 100.0)))
+record = Record()
+job = cm.Job(body, [cm.Fixed("left"), cm.Displacement("right", (0.05, 0.02))], [cm.Step(5)],
+             writers=[record], newton=cm.NewtonSettings(monitor=Kick()))
+try:
+    job.run()
+    text = "no interrupt"
+except KeyboardInterrupt:
+    text = f"interrupted steps={record.steps} closed={record.closed!r}"
+lines = comm.gather(f"rank {comm.rank}: {text}")
+if comm.rank == 0:
+    print(chr(10).join(lines), flush=True)
+"""
+
+
+def test_ctrl_c_on_one_rank_stops_both_at_the_same_point(tmp_path):
+    """A signal that reaches one rank only (here sent to itself in the middle of increment 3's
+    Newton iterations) stops both ranks at the same iteration, with the same two increments
+    written and the same message, and no rank waits for ever in a collective call."""
+    p, (r0, r1) = _run_two_ranks(tmp_path, INTERRUPT)
+    assert r0 == r1, p.stdout + p.stderr
+    assert r0.startswith("interrupted steps=[1, 2] closed='interrupted"), r0

@@ -250,3 +250,42 @@ def test_building_a_mesh_keeps_pythons_ctrl_c_handler():
         assert signal.getsignal(signal.SIGINT) is mine
     finally:
         signal.signal(signal.SIGINT, before)
+
+
+def test_a_signal_during_newton_stops_at_the_next_iteration():
+    """Ctrl-C in the middle of an increment's Newton iterations (sent by the monitor after the
+    first correction of increment 3) ends the run at the next iteration: increment 3 reaches no
+    writer, the first two are complete."""
+    import comove_dolfinx as cm
+    from comove_dolfinx.io import Writer
+
+    class Kick:
+        def __init__(self):
+            self.increments = 0
+
+        def iteration(self, newton, it, rnorm):
+            if self.increments == 2 and it == 1:
+                os.kill(os.getpid(), signal.SIGINT)
+
+        def solved(self, newton, ok, its, reason):
+            self.increments += ok
+
+    class Record(Writer):
+        def __init__(self):
+            self.steps = []
+
+        def write(self, run, row, inc):
+            self.steps.append(row["step"])
+
+    mesh = cm.rectangle(2.0, 0.5, 0.5, order=1)
+    body = cm.Body(mesh, "plane_strain", cm.Elastic(100.0, 0.3), update="svk", degree=1)
+    record = Record()
+    job = cm.Job(body, [cm.Fixed("left"), cm.Displacement("right", 0.2, component=0)], [cm.Step(5)],
+                 writers=[record], newton=cm.NewtonSettings(monitor=Kick()))
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            job.run()
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert record.steps == [1, 2]

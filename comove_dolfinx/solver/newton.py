@@ -124,6 +124,8 @@ class Newton(LineSearches):
         self.factorised = False            # the KSP holds the LU factors of a tangent
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
+        self.poll = None                   # called by every rank before each iteration (a job's
+                                           # collective check for Ctrl-C and SIGTERM: parallel.py)
 
     def residual(self) -> float:
         """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm."""
@@ -209,6 +211,8 @@ class Newton(LineSearches):
         if s.scale == "initial":
             self.residual_scale = max(self.residual_scale, r0)
         for it in range(1, s.max_it + 1):
+            if self.poll is not None:
+                self.poll()
             if self._converged(rnorm, it - 1):
                 return True, it - 1, "converged"
             with self.timer("jacobian"):
