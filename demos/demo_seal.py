@@ -15,7 +15,6 @@ import logging
 import pathlib
 import sys
 
-import gmsh
 import matplotlib
 
 matplotlib.use("Agg")
@@ -24,6 +23,8 @@ import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
 import comove_dolfinx as cm  # noqa: E402
+from comove_dolfinx.geometry import gmsh_session  # noqa: E402
+from comove_dolfinx.geometry.gmsh_session import gmsh  # noqa: E402
 
 parser = argparse.ArgumentParser(description="an O-ring section squeezed between rigid plates")
 parser.add_argument("--out", default="results/demo_seal")
@@ -44,15 +45,14 @@ logging.disable(logging.INFO)                 # the form compiler's messages
 msh = out / "seal.msh"
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
-    gmsh.initialize(readConfigFiles=False)
+    gmsh_session.start()                            # gmsh.initialize, keeping Python's Ctrl-C
     try:
-        gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(args.geo)
         gmsh.model.mesh.generate(2)
         gmsh.model.mesh.setOrder(2)                 # mid-side nodes on the true arc
         gmsh.write(str(msh))
     finally:
-        gmsh.finalize()
+        gmsh_session.stop()
 comm.barrier()
 
 # %% [markdown]

@@ -14,7 +14,9 @@ covers every parameter (order included) and the gmsh version; the file is writte
 and renamed, so a concurrent reader never sees half a file. Later calls, in any process, reuse the file.
 
 Gmsh runs on rank 0 only: the builders call ``gmsh.initialize``/``gmsh.finalize`` there, so do not call
-them from inside a gmsh session of your own.
+them from inside a gmsh session of your own. For a session of your own (meshing a .geo script, as
+demos/demo_seal.py does), ``gmsh_session.start()``/``stop()`` keep Python's Ctrl-C handler, which
+gmsh's own calls replace by the system's default (the process then dies at Ctrl-C without a word).
 """
 from .builders import annulus_sector, plate_section, quarter_disc, rectangle
 from .meshes import (
