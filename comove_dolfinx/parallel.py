@@ -120,14 +120,17 @@ class Interrupts:
 
     def check(self) -> None:
         """Collective: the recorded signal's handler on every rank once any rank has one (the
-        larger number if two ranks got different ones: SIGTERM before Ctrl-C)."""
+        larger number if two ranks got different ones: SIGTERM before Ctrl-C); a rank where that
+        signal has no Python handler raises KeyboardInterrupt, so that no rank goes on alone. A
+        handler that returns (one that only logs) lets the job go on, still recording."""
         signum = self.pending if self.comm.size == 1 else self.comm.allreduce(self.pending, op=MPI.MAX)
-        if signum:
-            self._restore()
-            self.pending = 0
-            handler = signal.getsignal(signum)
-            if callable(handler):
-                handler(signum, None)
+        if not signum:
+            return
+        self.pending = 0
+        handler = self._saved.get(signum, signal.getsignal(signum))
+        if not callable(handler):
+            raise KeyboardInterrupt(signal.Signals(signum).name)
+        handler(signum, None)
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         try:

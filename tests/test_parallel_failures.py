@@ -7,6 +7,7 @@ linear solve. The ranks must agree: a failed constitutive update or linear solve
 iteration, so every rank cuts the increment back and the run goes on to the same end; a failed
 callback stops every rank with the same error.
 """
+import pathlib
 import subprocess
 import textwrap
 
@@ -81,11 +82,11 @@ report(f"completed={res.completed} increments={len(res.increments)} "
 """
 
 
-def _run_two_ranks(tmp_path, script):
+def _run_two_ranks(tmp_path, script, *args):
     path = tmp_path / "case.py"
     path.write_text(textwrap.dedent(script))
     try:
-        p = launch.run([path, tmp_path], n=2, timeout=240)
+        p = launch.run([path, tmp_path, *args], n=2, timeout=240)
     except subprocess.TimeoutExpired as err:
         pytest.fail(f"deadlock: the two ranks did not finish ({err.stdout!r})")
     lines = sorted(line for line in p.stdout.splitlines() if line.startswith("rank "))
@@ -112,44 +113,15 @@ def test_linear_solve_failure_on_one_rank_cuts_back_on_both(tmp_path):
     assert "completed=True" in r0 and "cutbacks=1" in r0
 
 
+
 INTERRUPT = """
-import logging, os, signal, sys
-logging.disable(logging.INFO)
+import sys
+sys.path.insert(0, sys.argv[2])                    # the tests: the strip job of test_safety
 from mpi4py import MPI
-import comove_dolfinx as cm
-from comove_dolfinx.io import Writer
+from test_safety import KickInNewton, _interrupted
 comm = MPI.COMM_WORLD
-signal.signal(signal.SIGINT, signal.default_int_handler)
-
-class Kick:
-    # Ctrl-C on rank 1 only, after the first correction of increment 3
-    def __init__(self):
-        self.increments = 0
-    def iteration(self, newton, it, rnorm):
-        if comm.rank == 1 and self.increments == 2 and it == 1:
-            os.kill(os.getpid(), signal.SIGINT)
-    def solved(self, newton, ok, its, reason):
-        self.increments += ok
-
-class Record(Writer):
-    def __init__(self):
-        self.steps, self.closed = [], None
-    def write(self, run, row, inc):
-        self.steps.append(row["step"])
-    def close(self, run, results):
-        self.closed = results.message
-
-md = cm.rectangle(1.0, 0.5, 0.125, order=2, comm=comm, cache_dir=sys.argv[1])
-body = cm.Body(md, "plane_strain", cm.J2(1000.0, 0.3, cm.Hardening.linear(15.0, 100.0)))
-record = Record()
-job = cm.Job(body, [cm.Fixed("left"), cm.Displacement("right", (0.05, 0.02))], [cm.Step(5)],
-             writers=[record], newton=cm.NewtonSettings(monitor=Kick()))
-try:
-    job.run()
-    text = "no interrupt"
-except KeyboardInterrupt:
-    text = f"interrupted steps={record.steps} closed={record.closed!r}"
-lines = comm.gather(f"rank {comm.rank}: {text}")
+steps, closed = _interrupted(monitor=KickInNewton(rank=1))
+lines = comm.gather(f"rank {comm.rank}: interrupted steps={steps} closed={closed}")
 if comm.rank == 0:
     print(chr(10).join(lines), flush=True)
 """
@@ -158,7 +130,6 @@ if comm.rank == 0:
 def test_ctrl_c_on_one_rank_stops_both_at_the_same_point(tmp_path):
     """A signal that reaches one rank only (here sent to itself in the middle of increment 3's
     Newton iterations) stops both ranks at the same iteration, with the same two increments
-    written and the same message, and no rank waits for ever in a collective call."""
-    p, (r0, r1) = _run_two_ranks(tmp_path, INTERRUPT)
-    assert r0 == r1, p.stdout + p.stderr
-    assert r0.startswith("interrupted steps=[1, 2] closed='interrupted"), r0
+    written and the writers closed as interrupted, and no rank waits for ever in a collective call."""
+    p, (r0, r1) = _run_two_ranks(tmp_path, INTERRUPT, pathlib.Path(__file__).resolve().parent)
+    assert r0 == r1 == "interrupted steps=[1, 2] closed=(True, 2)", p.stdout + p.stderr

@@ -239,28 +239,32 @@ def test_a_signal_waits_until_the_increment_is_written():
     class Kick(Writer):
         def write(self, run, row, inc):
             if row["step"] == 2:
-                os.kill(os.getpid(), signal.SIGINT)
+                signal.raise_signal(signal.SIGINT)
 
     assert _interrupted(first_writer=Kick()) == ([1, 2], (True, 2))
+
+
+class KickInNewton:
+    """A Newton monitor that sends this process Ctrl-C after the first correction of increment 3
+    (on one MPI rank only if ``rank`` is given)."""
+
+    def __init__(self, rank=None):
+        self.rank, self.increments = rank, 0
+
+    def iteration(self, newton, it, rnorm):
+        if self.increments == 2 and it == 1 and self.rank in (None, newton.model.comm.rank):
+            signal.raise_signal(signal.SIGINT)
+
+    def solved(self, newton, ok, its, reason):
+        self.increments += ok
 
 
 def test_a_signal_during_newton_stops_at_the_next_iteration():
     """Ctrl-C in the middle of an increment's Newton iterations (sent by the monitor after the
     first correction of increment 3) ends the run at the next iteration: increment 3 reaches no
-    writer, the first two are complete."""
-
-    class Kick:
-        def __init__(self):
-            self.increments = 0
-
-        def iteration(self, newton, it, rnorm):
-            if self.increments == 2 and it == 1:
-                os.kill(os.getpid(), signal.SIGINT)
-
-        def solved(self, newton, ok, its, reason):
-            self.increments += ok
-
-    assert _interrupted(monitor=Kick()) == ([1, 2], (True, 2))
+    writer, the first two are complete. (On two ranks, with the signal on one of them only:
+    test_parallel_failures.)"""
+    assert _interrupted(monitor=KickInNewton()) == ([1, 2], (True, 2))
 
 
 def test_building_a_mesh_keeps_pythons_ctrl_c_handler():
@@ -279,3 +283,28 @@ def test_building_a_mesh_keeps_pythons_ctrl_c_handler():
         assert signal.getsignal(signal.SIGINT) is mine
     finally:
         signal.signal(signal.SIGINT, before)
+
+
+def test_a_rank_without_a_python_handler_still_stops():
+    """A signal recorded elsewhere (on another rank: simulated by setting it pending) for which this
+    rank has no Python handler (SIGTERM at the system's default) still stops this rank, with
+    KeyboardInterrupt naming it; a handler that returns lets the job go on."""
+    from mpi4py import MPI
+
+    from comove_dolfinx.parallel import Interrupts
+
+    before = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        with pytest.raises(KeyboardInterrupt, match="SIGTERM"):
+            with Interrupts(MPI.COMM_SELF) as it:
+                it.pending = int(signal.SIGTERM)
+                it.check()
+        seen = []
+        signal.signal(signal.SIGTERM, lambda signum, frame: seen.append(signum))
+        with Interrupts(MPI.COMM_SELF) as it:
+            signal.raise_signal(signal.SIGTERM)         # recorded, not acted on yet
+            assert seen == [] and it.pending == signal.SIGTERM
+            it.check()
+            assert seen == [signal.SIGTERM] and it.pending == 0
+    finally:
+        signal.signal(signal.SIGTERM, before)
