@@ -25,9 +25,13 @@ def test_richardson_recovers_the_limit_and_order():
 
 
 def test_pareto_front_keeps_the_undominated_runs():
-    rows = [{"cpu_s": c, "error_percent": e, "id": i}
-            for i, (c, e) in enumerate([(1.0, 5.0), (2.0, 1.0), (1.5, 6.0), (3.0, 1.0), (4.0, 0.1),
-                                        (0.5, math.nan)])]
+    """Only completed runs: one that stopped after its q was read (id 6, cheap because short) would
+    otherwise dominate the front."""
+    rows = [{"cpu_s": c, "error_percent": e, "id": i, "status": st}
+            for i, (c, e, st) in enumerate([(1.0, 5.0, "completed"), (2.0, 1.0, "completed"),
+                                            (1.5, 6.0, "completed"), (3.0, 1.0, "completed"),
+                                            (4.0, 0.1, "completed"), (0.5, math.nan, "completed"),
+                                            (0.9, 0.5, "stopped")])]
     assert [r["id"] for r in report.pareto(rows)] == [0, 1, 4]
 
 

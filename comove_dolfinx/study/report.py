@@ -56,10 +56,15 @@ def add_errors(rows: list[dict], ref: float) -> None:
         r["error_percent"] = 100.0 * abs(r["q"] / ref - 1.0)      # nan where q could not be read
 
 
+def on_cost_axis(r: dict) -> bool:
+    """A run whose CPU time buys its error: completed, with q read. (A run that stopped after the
+    ring's delta = 1 has q, but its CPU time is that of a shorter run than the others'.)"""
+    return r.get("status", "completed") == "completed" and not math.isnan(r.get("error_percent", NAN))
+
+
 def pareto(rows: list[dict]) -> list[dict]:
-    """The runs that no other run beats in both CPU time and error."""
-    ok = sorted((r for r in rows if not math.isnan(r.get("error_percent", NAN))),
-                key=lambda r: (r["cpu_s"], r["error_percent"]))
+    """The completed runs that no other completed run beats in both CPU time and error."""
+    ok = sorted((r for r in rows if on_cost_axis(r)), key=lambda r: (r["cpu_s"], r["error_percent"]))
     front, best = [], math.inf
     for r in ok:
         if r["error_percent"] < best:
@@ -108,11 +113,11 @@ def chart(plan: ScenePlan, rows: list[dict], ref: dict, path: pathlib.Path) -> N
     floor = 1e-4
     for i, fam in enumerate(families):
         rs = sorted((r for r in rows if r["family"] == fam), key=lambda r: r["x"])
-        ok = [r for r in rs if not math.isnan(r["error_percent"])]
+        ok = [r for r in rs if on_cost_axis(r)]
         style = "o-" if fam.startswith("update") else ("s--" if fam.startswith("mesh") else "^:")
         ax.plot([r["cpu_s"] for r in ok], [max(r["error_percent"], floor) for r in ok], style, ms=4,
                 color=cmap(i % 20), label=fam)
-        bad = [r for r in rs if math.isnan(r["error_percent"])]       # along the top edge
+        bad = [r for r in rs if not on_cost_axis(r)]                  # along the top edge
         ax.plot([r["cpu_s"] for r in bad], [0.97] * len(bad), "x", color=cmap(i % 20), ms=8, mew=2,
                 transform=matplotlib.transforms.blended_transform_factory(ax.transData, ax.transAxes))
     front = pareto(rows)
