@@ -5,9 +5,11 @@ laws.py with the obstacle's gap and normal at the current position x = X + u and
 model's facet traction (docs/theory.md section 6). Friction uses the pressure of a lag state, the body
 at u_lag against the obstacle where it stood then: the converged state of the last increment
 (Shang and Chen's scheme), or with ``relag`` the state of the last pass within the increment, repeated
-until the pressure settles (true Coulomb). The lag state depends on converged data only. The penalty
-friction keeps its stick part e_n as a boundary field (a lumped projection at each converged
-increment); Nitsche's lives in the stress.
+until the pressure settles (true Coulomb). The lag state depends on converged data only, and its
+pressure is the pressure that state converged with, to round-off: Nitsche's stress at u_lag is
+evaluated from the converged state u_lag was solved from (a FacetBase), not from the one after it.
+The penalty friction keeps its stick part e_n as a boundary field (a lumped projection at each
+converged increment); Nitsche's lives in the stress.
 
 Results: the force from the residual (F . e = -R_c(u; e) for the constant fields e_x, e_y), the extent
 (current length of the boundary where the pressure is positive, at the facet quadrature points), the
@@ -119,15 +121,19 @@ class Contact(Item):
             R, p = laws.nitsche_normal(g, n_o, v, gamma, th, p_u, ufl.derivative(p_u, u, v))
         self.p_ref = p                                           # pressure per reference area
         self.q_ref = None
+        self._base = self._base_kept = None
         if self.mu > 0:
             # the lag state: the body at u_lag against the obstacle where it stood then (d_lag)
             x_lag, d_lag = ctx.x + self.u_lag, self._d_lag
-            g_lag = obs.gap(x_lag, d_lag)
+            g_lag, self._n_lag = obs.gap(x_lag, d_lag), obs.normal(x_lag, d_lag)
             if self.method == "penalty":
                 p_lag = gamma * laws.positive_part(-g_lag)
             else:
-                p_lag = laws.positive_part(ufl.dot(obs.normal(x_lag, d_lag), ctx.facet_traction(N, self.u_lag))
-                                           - gamma * g_lag)
+                # the stress at u_lag from the state u_lag was solved from (captured at each commit)
+                self._base = ctx.facet_base()
+                PN_lag = ctx.facet_traction(N, self.u_lag, self._base)
+                p_lag = laws.positive_part(ufl.dot(self._n_lag, PN_lag) - gamma * g_lag)
+                self._base_kept = self._base.arrays()
             self._mu_c = fem.Constant(msh, PETSc.ScalarType(self.mu))   # no recompile for a new mu
             s = self._mu_c * p_lag
             slip = ufl.dot(t_o, (u - u_n) - (obs.d - self._d_n))
@@ -159,10 +165,15 @@ class Contact(Item):
         self._d_n.value = self.obstacle.displacement(self.factor)
         self._d_lag.value = self._d_n.value
         self.u_lag.x.array[:] = self.u.x.array
+        if self._base is not None:              # the model's state has not moved yet: u's own base
+            self._base.capture()
+            self._base_kept = self._base.arrays()
 
     def restore(self) -> None:
         self.u_lag.x.array[:] = self._u_n.x.array
         self._d_lag.value = self._d_n.value
+        if self._base is not None:              # a relag pass may have moved it
+            self._base.set_arrays(self._base_kept)
 
     def save_state(self) -> dict:
         out = super().save_state()
@@ -187,6 +198,8 @@ class Contact(Item):
         p_old = self._assemble_vec(self._form("p_lag"))
         self.u_lag.x.array[:] = self.u.x.array
         self._d_lag.value = self.obstacle.displacement(self.factor)
+        if self._base is not None:              # this pass was solved from the current state
+            self._base.capture()
         p_new = self._assemble_vec(self._form("p_lag"))
         scale = max(np.abs(p_new).max(), 1e-300)
         change = self.comm.allreduce(float(np.abs(p_new - p_old).max()) / scale, op=MPI.MAX)
@@ -220,7 +233,8 @@ class Contact(Item):
             # reference length of the contact set that slips (friction at its threshold) and sticks
             slipping = ufl.conditional(self._slipping, 1.0, 0.0)
             self._ufl.update(slip=chi * slipping * dsc, stick=chi * (1.0 - slipping) * dsc,
-                             q=self.q_ref / stretch * phi1 * dsc, p_lag=self._p_lag * phi * dsc)
+                             q=self.q_ref / stretch * phi1 * dsc, p_lag=self._p_lag * phi * dsc,
+                             lag_force=self._p_lag * ufl.dot(self._n_lag, self._e) * ctx.weight * dsc)
             if self.method == "penalty":
                 self._ufl["e"] = self._e_new * phi * dsc
         self._compiled = {}
@@ -307,6 +321,17 @@ class Contact(Item):
         for i in range(2):
             self._e.value = np.eye(2)[i]
             out[i] = self.comm.allreduce(fem.assemble_scalar(self._form("force")), op=MPI.SUM)
+        return out
+
+    def lag_force(self) -> np.ndarray:
+        """Force (x, y) of the lag state's pressure on the body, the normal force that the friction
+        threshold mu p_lag is taken from: after a commit, the normal part of that increment's
+        :meth:`force` (zeros without friction)."""
+        out = np.zeros(2)
+        if "lag_force" in self._ufl:
+            for i in range(2):
+                self._e.value = np.eye(2)[i]
+                out[i] = self.comm.allreduce(fem.assemble_scalar(self._form("lag_force")), op=MPI.SUM)
         return out
 
     def update_fields(self) -> None:

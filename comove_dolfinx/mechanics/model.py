@@ -32,7 +32,7 @@ from ..parallel import agree
 from .body import Body
 from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
 from .quadrature import QuadratureRule
-from .state import InvertedElement, QuadratureState, ReturnMapFailure
+from .state import FacetBase, InvertedElement, QuadratureState, ReturnMapFailure
 from .updates import make_update
 
 __all__ = ["Context", "InvertedElement", "Model", "ReturnMapFailure"]
@@ -67,7 +67,8 @@ class Context:
     update: object                # the stress update (its F(u) is the loads' deformation gradient)
     E: float                      # Young's modulus (scales the contact stiffness)
     degree: int
-    facet_traction: object        # (N, u) -> in-plane components of P N on facets
+    facet_traction: object        # (N, u, base) -> in-plane components of P N on facets
+    facet_base: object            # () -> a new FacetBase of the body's converged state
 
     def facets(self, name: str) -> np.ndarray:
         ft = self.meshdata.facet_tags
@@ -136,7 +137,8 @@ class Model:
     # ----------------------------------------------------------------------------------------
     def context(self) -> Context:
         return Context(self.mesh, self.meshdata, self.V, self.u, self.u_n, self.v, self.x, self.kin,
-                       self.update, self.elastic.E, self.degree, self.facet_traction)
+                       self.update, self.elastic.E, self.degree, self.facet_traction,
+                       lambda: FacetBase(self.state, self.u_n))
 
     def finalize(self, jit_options: dict | None = None) -> None:
         """Build and compile the residual, the Jacobian and the stress evaluation (once)."""
@@ -192,22 +194,23 @@ class Model:
             self._internal_form = compat.form(self._internal, self._jit)
         return self._internal_form
 
-    def facet_traction(self, N, u=None):
+    def facet_traction(self, N, u=None, base: FacetBase | None = None):
         """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the
         current one), for Nitsche terms: the constitutive update evaluated at the facet's points as
-        a UFL function of u, from the converged state of the last increment (cell-wise DG fits) and,
-        for elastic-plastic bodies, the material's law in UFL. Everything that varies within an
+        a UFL function of u, from the converged state of the last increment (cell-wise DG fits) or
+        from a captured ``base`` (the state a lag state u_lag was solved from) and, for
+        elastic-plastic bodies, the material's law in UFL. Everything that varies within an
         increment is a function of u, so the term's Jacobian is exact, and the traction at a lag
-        state u_lag depends on u_lag and converged state only (docs/theory.md section 6.3)."""
+        state depends on u_lag and converged state only (docs/theory.md section 6.3)."""
         u = self.u if u is None else u
-        st = self.state
-        up = self.update.build(u, self.u_n, st.facet("sigma_n"))
+        src, u_n = (self.state, self.u_n) if base is None else (base, base.u_n)
+        up = self.update.build(u, u_n, src.facet("sigma_n"))
         sig, F22 = up.sigma, up.F22
         if self.plastic is not None:
-            p_n = ufl.max_value(st.facet("p_n"), 0.0)            # the fit may dip below 0
+            p_n = ufl.max_value(src.facet("p_n"), 0.0)           # the fit may dip below 0
             sig, ezz = self.plastic.facet(up.sigma_rot, up.sigma, p_n, self.kin.model, self.constants)
             if ezz is not None:
-                F22 = st.facet("F22_n") * ufl.exp(ezz)
+                F22 = src.facet("F22_n") * ufl.exp(ezz)
         F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
         PN = ufl.det(F) * sig * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0.0])
         return ufl.as_vector([PN[0], PN[1]])

@@ -10,6 +10,8 @@ the thickness stretch, F22 = F22_n exp(ezz), and ``G_tr``/``G_rot`` the derivati
 Facet integrals cannot see quadrature functions (dolfinx evaluates none there); the converged state
 is copied to cell-wise DG fits at each commit (exact interpolation for DG1 and the 3-point rule), from
 which the material law is evaluated again on the facets when a term asks for the stress there.
+A :class:`FacetBase` keeps a copy of those fits (and of u_n) as they were when an increment was
+solved from them, so that the facet stress of that solution can be evaluated again later, exactly.
 """
 from __future__ import annotations
 
@@ -125,3 +127,44 @@ class QuadratureState:
         if name in self._facet:
             f, interp = self._facet[name]
             interp(values, f)
+
+
+class FacetBase:
+    """The converged state that a displacement is solved from, as the facet terms see it: the
+    displacement u_n and the facet fits of the state (copies, taken by :meth:`capture`).
+
+    The material law on the facets is evaluated from the fits of the converged state of the
+    increment's start; once that state moves on (commit), the new fits describe the same solution
+    only to the fit's error. A term that needs the facet stress of an earlier solution (the pressure
+    of the last converged increment, for lagged friction) evaluates the law at that solution from a
+    base captured when it was solved, and gets the same stress to round-off (docs/theory.md section 6.3).
+    """
+
+    def __init__(self, state: QuadratureState, u_n: fem.Function):
+        self._state, self._u_n = state, u_n
+        self.u_n = fem.Function(u_n.function_space, name="u_n_base")
+        self.u_n.x.array[:] = u_n.x.array
+        self._fits: dict = {}
+
+    def facet(self, name: str):
+        """The copy of the state's fit ``name`` (see :meth:`QuadratureState.facet`)."""
+        if name not in self._fits:
+            src = self._state.facet(name)
+            f = fem.Function(src.function_space, name=name + "_base")
+            f.x.array[:] = src.x.array
+            self._fits[name] = f
+        return self._fits[name]
+
+    def capture(self) -> None:
+        """Take the body's converged state as it is now."""
+        self.u_n.x.array[:] = self._u_n.x.array
+        for name, f in self._fits.items():
+            f.x.array[:] = self._state.facet(name).x.array
+
+    def arrays(self) -> list:
+        """Copies of what the base holds (for :meth:`set_arrays`)."""
+        return [self.u_n.x.array.copy()] + [f.x.array.copy() for f in self._fits.values()]
+
+    def set_arrays(self, arrays: list) -> None:
+        for f, a in zip([self.u_n, *self._fits.values()], arrays):
+            f.x.array[:] = a
