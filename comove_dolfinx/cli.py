@@ -217,7 +217,14 @@ def main(argv=None) -> int:
     _own_signals()
     from . import check_platform
     check_platform()
-    return _scenes() if args.command == "scenes" else _run(args)
+    if args.command == "scenes":
+        try:
+            return _scenes()
+        except BrokenPipeError:          # the listing piped into head and the like, which closed early
+            import os
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
+    return _run(args)
 
 
 def _study(args) -> int:
@@ -278,7 +285,8 @@ def _rank() -> int:
 
 def _check_early(args):
     """The run's arguments checked before dolfinx is loaded: the scene and its parameters, or the
-    problem file, and the output folder's name. The message, or None."""
+    problem file, and the output folder (the run checks it again when it takes it). The message,
+    or None."""
     from .mechanics.material_data import MaterialError
     from .presets import SceneError, get_scene
     from .problem import ProblemError, read
@@ -297,7 +305,8 @@ def _check_early(args):
             get_scene(args.scene, args.set)
     except (SceneError, MaterialError, ProblemError) as err:
         return err
-    return None
+    from .io.folder import check
+    return check(args.out, args.overwrite, args.restart)
 
 
 if __name__ == "__main__":

@@ -107,3 +107,37 @@ def test_bad_values_refused_before_dolfinx_is_loaded(tmp_path, scene, pair, word
                        capture_output=True, text=True, timeout=120)
     assert p.returncode == 2, p.stdout + p.stderr
     assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+@pytest.mark.parametrize("case, words", [("file", "not a folder"), ("under_a_file", "is a file"),
+                                         ("old_results", "--overwrite"), ("restart_nothing", "no checkpoint")])
+def test_bad_output_folder_refused_before_dolfinx_is_loaded(tmp_path, case, words):
+    """An --out that cannot take the run: one line with the fix, exit code 2, dolfinx never imported."""
+    import subprocess
+    import sys
+    afile = tmp_path / "a_file"
+    afile.write_text("x")
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "history.csv").write_text("step\n")
+    out, extra = {"file": (afile, []), "under_a_file": (afile / "sub", []), "old_results": (old, []),
+                  "restart_nothing": (tmp_path / "new", ["--restart"])}[case]
+    code = ("import sys; from comove_dolfinx import cli; rc = cli.main(sys.argv[1:]); "
+            "assert 'dolfinx' not in sys.modules, 'dolfinx was imported'; sys.exit(rc)")
+    p = subprocess.run([sys.executable, "-c", code, "run", "beam", "--out", str(out), *extra],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert (old / "history.csv").read_text() == "step\n" and not (tmp_path / "new").exists()
+
+
+def test_scenes_listing_into_a_closed_pipe():
+    """`comove scenes | head -1`: the reader goes away before the listing is written; the command
+    ends quietly (no BrokenPipeError traceback)."""
+    import subprocess
+    import sys
+    p = subprocess.Popen([sys.executable, "-m", "comove_dolfinx.cli", "scenes"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    p.stdout.close()                              # before the command has written anything
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 0 and "Traceback" not in err, err

@@ -3,11 +3,25 @@
 A writer has ``open(run)`` (the compiled model, the history's columns, the job), ``write(run, row,
 increment)`` after every converged increment (before the state moves on) and ``close(run, results)``
 at the end, also after a failure. Every rank calls them; a failure on one rank stops all.
-"""
-from .plots import Snapshots, draw_plane, snapshot_grid
-from .vtk import VTK
-from .writers import Console, HistoryCSV, RunInfo, Writer, read_history
-from .xdmf import XDMF, FibreStress
 
-__all__ = ["VTK", "XDMF", "Console", "FibreStress", "HistoryCSV", "RunInfo", "Snapshots", "Writer", "draw_plane",
-           "read_history", "snapshot_grid"]
+The names below are imported on first use, so that ``comove_dolfinx.io.folder`` (the output folder's
+checks, which the command makes before it loads dolfinx) stays light.
+"""
+
+_WHERE = {"Snapshots": "plots", "draw_plane": "plots", "snapshot_grid": "plots", "VTK": "vtk",
+          "Console": "writers", "HistoryCSV": "writers", "RunInfo": "writers", "Writer": "writers",
+          "read_history": "writers", "XDMF": "xdmf", "FibreStress": "xdmf"}
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str):
+    if name not in _WHERE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(list(globals()) + __all__)

@@ -9,6 +9,7 @@
   the old run sits beside the new one;
 * a path that exists but is not a folder, or cannot be written, is refused.
 
+:func:`check` asks the same without writing anything (the command, before it loads dolfinx).
 The refusals are :class:`FolderError` with the path and the fix; every rank raises the same.
 """
 from __future__ import annotations
@@ -16,8 +17,6 @@ from __future__ import annotations
 import os
 import pathlib
 import shutil
-
-from ..parallel import on_root
 
 RESULTS = ("history.csv", "run.json", "results.pvd", "results.xdmf", "results.h5")
 RESULT_GLOBS = ("results_*.vtu", ".results_*.tmp", "checkpoint")
@@ -42,6 +41,45 @@ def _alive(pid: int) -> bool:
     return state not in ("Z", "X")
 
 
+def _old_results(p: pathlib.Path) -> list[str]:
+    return [f for f in RESULTS if (p / f).exists()] + [g.name for pat in RESULT_GLOBS for g in p.glob(pat)]
+
+
+def check(path, overwrite: bool = False, restart: bool = False) -> str | None:
+    """Why ``path`` cannot take a run (the message, naming the fix), or None; reads, never writes
+    (the standard library only: the command asks before it loads dolfinx)."""
+    p = pathlib.Path(path)
+    if p.exists() and not p.is_dir():
+        return f"--out {p}: this is a file, not a folder: choose a folder"
+    parent = p
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        return f"--out {p}: cannot create the folder ({parent} is a file): choose another place"
+    if not os.access(parent, os.W_OK | os.X_OK):
+        return f"--out {p}: {'the folder' if parent == p else parent} is not writable: choose another place"
+    if not p.is_dir():
+        return "--out {}: no checkpoint to restart from: run without --restart".format(p) if restart else None
+    lock = p / ".lock"
+    if lock.exists():
+        try:
+            pid = int(lock.read_text().split()[0])
+        except (ValueError, IndexError, OSError):
+            pid = -1
+        if pid > 0 and _alive(pid):
+            return f"--out {p}: another run (process {pid}) is writing there: wait for it or choose another folder"
+    old = _old_results(p)
+    if restart:
+        if not (p / "checkpoint" / "meta.json").exists():
+            return f"--out {p}: no checkpoint to restart from" + (
+                " (none was saved: a run killed within its first --checkpoint-interval seconds leaves "
+                "none): run it again with --overwrite instead of --restart" if old else ": run without --restart")
+    elif old and not overwrite:
+        return (f"--out {p}: holds the results of an earlier run ({', '.join(sorted(old)[:3])}"
+                f"{', ...' if len(old) > 3 else ''}): pass --overwrite to replace them, or choose another folder")
+    return None
+
+
 class RunFolder:
     def __init__(self, path, overwrite: bool = False, comm=None, restart: bool = False):
         from mpi4py import MPI
@@ -51,38 +89,16 @@ class RunFolder:
 
     def _take(self) -> None:
         p = self.path
-        if p.exists() and not p.is_dir():
-            raise FolderError(f"--out {p}: this is a file, not a folder: choose a folder")
+        why = check(p, self.overwrite, self.restart)
+        if why is not None:
+            raise FolderError(why)
         try:
             p.mkdir(parents=True, exist_ok=True)
         except OSError as err:
             raise FolderError(f"--out {p}: cannot create the folder ({err.strerror}): choose another "
                               "place") from None
-        if not os.access(p, os.W_OK | os.X_OK):
-            raise FolderError(f"--out {p}: the folder is not writable: choose another place")
-        if self.lock.exists():
-            try:
-                pid = int(self.lock.read_text().split()[0])
-            except (ValueError, IndexError, OSError):
-                pid = -1
-            if pid > 0 and _alive(pid):
-                raise FolderError(f"--out {p}: another run (process {pid}) is writing there: wait for it "
-                                  "or choose another folder")
-            self.lock.unlink(missing_ok=True)              # left by a run that was killed
-        old = [f for f in RESULTS if (p / f).exists()] + [
-            g.name for pat in RESULT_GLOBS for g in p.glob(pat)]
-        if self.restart:
-            if not (p / "checkpoint" / "meta.json").exists():
-                raise FolderError(
-                    f"--out {p}: no checkpoint to restart from" + (
-                        " (none was saved: a run killed within its first --checkpoint-interval seconds "
-                        "leaves none): run it again with --overwrite instead of --restart" if old else
-                        ": run without --restart"))
-            old = []                                     # the run goes on where it stopped
-        elif old and not self.overwrite:
-            raise FolderError(f"--out {p}: holds the results of an earlier run ({', '.join(sorted(old)[:3])}"
-                              f"{', ...' if len(old) > 3 else ''}): pass --overwrite to replace them, or "
-                              "choose another folder")
+        old = [] if self.restart else _old_results(p)      # a restart goes on where it stopped
+        self.lock.unlink(missing_ok=True)                   # left by a run that was killed (check)
         try:
             fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         except FileExistsError:
@@ -98,6 +114,7 @@ class RunFolder:
                 target.unlink(missing_ok=True)
 
     def __enter__(self):
+        from ..parallel import on_root
         on_root(self.comm, self._take)
         return self
 
