@@ -219,7 +219,9 @@ def main(argv=None) -> int:
     check_platform()
     if args.command == "scenes":
         try:
-            return _scenes()
+            code = _scenes()
+            sys.stdout.flush()           # here, not at exit, where the error could not be caught
+            return code
         except BrokenPipeError:          # the listing piped into head and the like, which closed early
             import os
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
