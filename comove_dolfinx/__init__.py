@@ -40,18 +40,25 @@ _WHERE = {name: module for module, names in _API.items() for name in names}
 __all__ = sorted(_WHERE)
 
 
-def __getattr__(name: str):
-    """The public API, imported on first use (dolfinx is heavy)."""
-    if name not in _WHERE:
-        raise AttributeError(f"module 'comove_dolfinx' has no attribute {name!r}")
+def lazy_names(package: str, where: dict[str, str], namespace: dict):
+    """(__getattr__, __dir__) of a package whose names ``where`` (name -> submodule) are imported
+    on first use (PEP 562), so that importing the package loads none of them."""
     import importlib
-    value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
-    globals()[name] = value
-    return value
+
+    def getattr_(name: str):
+        if name not in where:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(f".{where[name]}", package), name)
+        namespace[name] = value
+        return value
+
+    def dir_():
+        return sorted(set(namespace) | set(where))
+    return getattr_, dir_
 
 
-def __dir__():
-    return sorted(list(globals()) + __all__)
+# the public API, imported on first use (dolfinx is heavy)
+__getattr__, __dir__ = lazy_names(__name__, _WHERE, globals())
 
 
 def check_platform() -> None:

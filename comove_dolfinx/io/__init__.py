@@ -13,15 +13,6 @@ _WHERE = {"Snapshots": "plots", "draw_plane": "plots", "snapshot_grid": "plots",
           "read_history": "writers", "XDMF": "xdmf", "FibreStress": "xdmf"}
 __all__ = sorted(_WHERE)
 
+from .. import lazy_names  # noqa: E402
 
-def __getattr__(name: str):
-    if name not in _WHERE:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-    value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(list(globals()) + __all__)
+__getattr__, __dir__ = lazy_names(__name__, _WHERE, globals())
