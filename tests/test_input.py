@@ -92,6 +92,7 @@ BAD_EARLY = [("ring", "E=-1", "E = -1.0"), ("ring", "size=inf", "size = inf"), (
              ("beam", "mu=inf", "mu = inf"), ("beam", "mu=nan", "mu = nan"), ("beam", "gamma0=inf", "gamma0 = inf"),
              ("beam", "q_max=nan", "q_max = nan"), ("ring", "n_steps=100000000000000000000", "1000000"),
              ("ring", "nu=0.5", "nu = 0.5"), ("ring", "hardening=0:2800,0.1:2000", "non-decreasing"),
+             ("ring", "hardening=0:2800,0.05:3600,0.01:3000", "hardening = '0:2800,0.05:3600,0.01:3000': row 2"),
              ("elastica", "mesh=nowhere.msh", "nowhere.msh"), ("beam", "E=1e-30", "q_max = 0.5 is not small against E"),
              ("plate", "p_max=2000", "p_max = 2000.0 is not small"), ("ring", "E=2000", "yield stress = 2800.0")]
 

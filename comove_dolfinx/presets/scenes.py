@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from ..mechanics.material_data import Hardening
+from ..mechanics.material_data import Hardening, MaterialError
 from ..names import LAWS, PLASTIC_UPDATES
 from .base import ContactScene, Scene, SceneError
 
@@ -190,7 +190,10 @@ def parse_table(text: str) -> Hardening:
     except ValueError:
         raise SceneError(f"hardening = {text!r}: write the table as strain:stress pairs separated "
                          "by commas, e.g. 0:2800,0.01:3000") from None
-    return Hardening(strain, stress)
+    try:
+        return Hardening(strain, stress)
+    except MaterialError as err:              # named with the parameter the user wrote
+        raise SceneError(f"hardening = {text!r}: {err}") from None
 
 
 @dataclass
