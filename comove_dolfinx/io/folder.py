@@ -58,9 +58,7 @@ def check(path, overwrite: bool = False, restart: bool = False) -> str | None:
         return f"--out {p}: cannot create the folder ({parent} is a file): choose another place"
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"--out {p}: {'the folder' if parent == p else parent} is not writable: choose another place"
-    if not p.is_dir():
-        return "--out {}: no checkpoint to restart from: run without --restart".format(p) if restart else None
-    lock = p / ".lock"
+    lock = p / ".lock"                       # (a folder still to be made has no lock and no results)
     if lock.exists():
         try:
             pid = int(lock.read_text().split()[0])
