@@ -213,8 +213,8 @@ class Hardening:
     def solve_dp(self, seq_tr: ArrayLike, p_n: ArrayLike, three_mu: float) -> tuple[np.ndarray, np.ndarray]:
         """Exact root dp of seq_tr - three_mu dp - sigma_y(p_n + dp) = 0 (docs/theory.md section 4.2).
 
-        The residual is piecewise linear and strictly decreasing in dp, so the root is found by scanning the
-        segments. A root exactly on a table point belongs to the segment that starts there.
+        The residual is piecewise linear and strictly decreasing in dp, so the root lies in the segment
+        after the last table point at which the residual is still >= 0. A root exactly on a table point belongs to the segment that starts there.
 
         Parameters
         ----------
@@ -231,18 +231,15 @@ class Hardening:
             The increment and the slope of the segment holding p_n + dp.
         """
         seq, pn = np.broadcast_arrays(np.asarray(seq_tr, dtype=float), np.asarray(p_n, dtype=float))
-        dp = np.zeros(seq.shape)
-        h_act = np.zeros(seq.shape)
-        todo = np.ones(seq.shape, dtype=bool)
-        last = len(self._p) - 1
-        for k, (p0, s0, h) in enumerate(zip(self._p, self._s, self._h)):
-            here = todo.copy()
-            if k < last:   # the root lies in this segment if the residual is negative at its end
-                p1 = self._p[k + 1]
-                here &= (pn < p1) & (seq - three_mu * (p1 - pn) - self._s[k + 1] < 0.0)
-            start = np.maximum(p0, pn)
-            g = seq - three_mu * (start - pn) - (s0 + h * (start - p0))
-            dp = np.where(here, start - pn + g / (three_mu + h), dp)
-            h_act = np.where(here, h, h_act)
-            todo &= ~here
+        # the segment holding p_n, then one more for every later table point at which the residual is
+        # still >= 0 (it decreases, so those points come first): one comparison of (points, table)
+        k = np.maximum(np.searchsorted(self._p, pn, side="right") - 1, 0)
+        if len(self._p) > 1:
+            later = self._p[None, 1:] > pn[..., None]
+            ahead = seq[..., None] - three_mu * (self._p[None, 1:] - pn[..., None]) - self._s[None, 1:]
+            k = k + np.count_nonzero(later & (ahead >= 0.0), axis=-1)
+        p0, h_act = self._p[k], self._h[k]
+        start = np.maximum(p0, pn)
+        g = seq - three_mu * (start - pn) - (self._s[k] + h_act * (start - p0))
+        dp = start - pn + g / (three_mu + h_act)
         return dp, h_act

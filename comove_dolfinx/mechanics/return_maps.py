@@ -100,6 +100,11 @@ def full_tangent(index: np.ndarray, D: np.ndarray, n: int, model: str) -> np.nda
     return out
 
 
+_ONE_ONE_3 = np.outer(ONE, ONE) / 3.0
+_BROADCAST_BELOW = 1000     # yielding points: the broadcast took 33 against 140 us at 300 points,
+                            # 430 against 220 us at 3000 (NumPy 1.24)
+
+
 @dataclass
 class PointsReturn:
     """The return map at N points, its derivative and plastic strain stored only where they yield."""
@@ -134,12 +139,17 @@ def j2_return_points(sig_tr: np.ndarray, p_n: ArrayLike, elastic: Elastic, harde
     p[i] = pn_i + dp
     theta = 1.0 - three_mu * ratio
     c = 1.5 * three_mu * (1.0 / (three_mu + h) - ratio)
-    # D = 1/3 (1 x 1) + theta P_dev - c n (x) W n, entry by entry (numpy is slow on short inner axes)
-    D = np.empty((i.size, 4, 4))
+    # D = 1/3 (1 x 1) + theta P_dev - c n (x) W n: broadcast over few points, entry by entry over
+    # many (numpy is slow on short inner axes; both give the same bits)
     cn, wn = c[:, None] * n, WEIGHT * n
-    for a in range(4):
-        for b in range(4):
-            D[:, a, b] = ONE[a] * ONE[b] / 3.0 + theta * PDEV[a, b] - cn[:, a] * wn[:, b]
+    if i.size < _BROADCAST_BELOW:
+        D = _ONE_ONE_3 + theta[:, None, None] * PDEV
+        D -= cn[:, :, None] * wn[:, None, :]
+    else:
+        D = np.empty((i.size, 4, 4))
+        for a in range(4):
+            for b in range(4):
+                D[:, a, b] = ONE[a] * ONE[b] / 3.0 + theta * PDEV[a, b] - cn[:, a] * wn[:, b]
     return PointsReturn(sig, p, i, D, 1.5 * dp[:, None] * n)
 
 
