@@ -190,7 +190,8 @@ def main(argv=None) -> int:
     run.add_argument("--overwrite", action="store_true",
                      help="replace the results of an earlier run in the --out folder")
     run.add_argument("--restart", action="store_true",
-                     help="go on from the last checkpoint in the --out folder (same scene, same ranks)")
+                     help="go on from the last checkpoint in the --out folder (same scene and "
+                          "parameters, any number of ranks)")
     run.add_argument("--checkpoint-every", type=int, default=1, metavar="K",
                      help="save the state every K converged increments (default 1)")
     run.add_argument("--checkpoint-interval", type=float, default=CHECKPOINT_INTERVAL, metavar="S",

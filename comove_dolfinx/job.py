@@ -188,7 +188,7 @@ class Job:
 
     def run(self, progress: bool = False, restart=None) -> Results:
         """Compile, run every step, write; returns the :class:`Results` (also when a step fails).
-        ``restart``: a checkpoint folder (io.Checkpoint) to go on from, with the same ranks."""
+        ``restart``: a checkpoint folder (io.Checkpoint) to go on from, on any number of ranks."""
         t_start, before = time.perf_counter(), process_clock()[0]
         timer = Timer()
         with timer("setup and compilation"):

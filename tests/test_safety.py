@@ -3,6 +3,7 @@ readable (history, one .vtu per increment, a run.json that says the run is incom
 Ctrl-C end with one line and their exit codes, and no run writes into another's folder or mixes its
 files with an earlier run's."""
 import csv
+import fcntl
 import json
 import os
 import shutil
@@ -78,6 +79,24 @@ def test_killed_or_interrupted_run_keeps_its_increments(tmp_path, sig):
         assert len(rows) >= 4 and len(files) == len(rows) and meta["increment"] == len(rows)
 
 
+def test_two_runs_started_together_cannot_both_take_a_folder(tmp_path, monkeypatch):
+    """Both runs passed their checks before either took the folder: the second to take it is
+    refused and the first keeps its lock; once the first ends, the folder is free again."""
+    from comove_dolfinx.io import folder
+    lock = tmp_path / "run" / ".lock"
+    first, second = folder.RunFolder(tmp_path / "run"), folder.RunFolder(tmp_path / "run")
+    monkeypatch.setattr(folder, "check", lambda *args, **kwargs: None)
+    first._take()
+    with pytest.raises(folder.FolderError, match="another run"):
+        second._take()
+    assert folder._holder(lock) == os.getpid()
+    first.__exit__(None, None, None)
+    assert not lock.exists() and folder._holder(lock) is None
+    second._take()
+    assert folder._holder(lock) == os.getpid()
+    second.__exit__(None, None, None)
+
+
 def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
     out = tmp_path / "run"
     first = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=4"])
@@ -90,11 +109,15 @@ def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
     assert over.returncode == 0, over.stderr
     assert len(_rows(out / "history.csv")) == 2
     assert sorted(f.name for f in out.glob("results_*.vtu")) == ["results_00000.vtu", "results_00001.vtu"]
-    # a live run's lock (this test's own process) is refused; a dead one's is taken over
-    (out / ".lock").write_text(f"{os.getpid()}\n")
-    busy = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite"])
-    assert busy.returncode == 2 and "another run" in busy.stderr
-    (out / ".lock").write_text("999999999\n")
+    # a live run's lock (held by this test's own process) is refused; the file a killed run left
+    # (no process holds it) is taken over
+    with open(out / ".lock", "w") as held:
+        held.write(f"{os.getpid()}\n")
+        held.flush()
+        fcntl.flock(held, fcntl.LOCK_EX)
+        busy = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite"])
+    assert busy.returncode == 2 and f"another run (process {os.getpid()})" in busy.stderr, busy.stderr
+    (out / ".lock").write_text(f"{os.getpid()}\n")                    # a pid alone holds nothing
     stale = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite", "--set", "n_steps=1"])
     assert stale.returncode == 0, stale.stderr
     assert not (out / ".lock").exists()
@@ -130,12 +153,13 @@ def test_guards_stop_folding_and_warn_of_untrustworthy_results(tmp_path):
     assert "warning: penetration" in coarse.stdout
 
 
-@pytest.mark.parametrize("n", [1, 2])
-def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
+@pytest.mark.parametrize("n, n_restart", [(1, 1), (2, 2), (1, 2)])
+def test_restart_repeats_the_uninterrupted_run(tmp_path, n, n_restart):
     """The ring killed (kill -9) after a dozen increments and restarted from its last checkpoint
-    (--restart) gives the history of the uninterrupted run on the same ranks: the same increments
-    and Newton iterations, every column to 1e-12 of its largest value in serial (1e-6 on two ranks,
-    where the parallel direct solver's round-off differs from run to run)."""
+    (--restart, on the same ranks or on two after a serial start) gives the history of the
+    uninterrupted run on the restart's ranks: the same increments and Newton iterations, every
+    column to 1e-12 of its largest value in serial (1e-6 on two ranks, where the parallel direct
+    solver's round-off differs from run to run)."""
     import numpy as np
     out = tmp_path / "run"
     p = subprocess.Popen(launch.command([*RUN, "ring", "--out", out, "--no-progress",
@@ -153,17 +177,17 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
         time.sleep(0.05)
     meta = json.loads((out / "checkpoint" / "meta.json").read_text())
     assert 10 <= meta["increment"] < 37          # the kill may land between the history and the checkpoint
-    r = launch.run([*RUN, "ring", "--out", out, "--no-progress", "--restart"], n=n)
+    r = launch.run([*RUN, "ring", "--out", out, "--no-progress", "--restart"], n=n_restart)
     assert r.returncode == 0, r.stdout + r.stderr
     # the uninterrupted run on this platform (the stored history agrees with it to the tolerance
     # of test_histories: the dolfinx versions round differently)
-    full = launch.run([*RUN, "ring", "--out", tmp_path / "full", "--no-progress"], n=n)
+    full = launch.run([*RUN, "ring", "--out", tmp_path / "full", "--no-progress"], n=n_restart)
     assert full.returncode == 0, full.stdout + full.stderr
     new = _rows(out / "history.csv")
     ref = _rows(tmp_path / "full" / "history.csv")
     assert len(new) == len(ref) == 37
     assert [r["newton_its"] for r in new] == [r["newton_its"] for r in ref]
-    tol = 1e-12 if n == 1 else 1e-6
+    tol = 1e-12 if n == n_restart == 1 else 1e-6
     for col in ("force", "contact_width", "crown_gap", "max_plastic_strain"):
         a, b = (np.array([float(r[col]) for r in rows]) for rows in (new, ref))
         assert np.abs(a - b).max() <= tol * np.abs(b).max(), col
@@ -176,7 +200,7 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n):
     meta = json.loads((tmp_path / "full" / "checkpoint" / "meta.json").read_text())
     assert meta["increment"] == 37
     assert sorted(f.name for f in (tmp_path / "full" / "checkpoint").glob("state_*")) == \
-        [f"state_00037_rank{r}.npz" for r in range(n)]
+        [f"state_00037_rank{r}.npz" for r in range(n_restart)]
 
 
 def test_checkpoint_arrays_keep_their_shape_and_type():

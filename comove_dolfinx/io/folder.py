@@ -2,8 +2,11 @@
 
 ``RunFolder(path, overwrite)`` (a context manager, collective) takes the folder for a run:
 
-* a folder that another live run holds (its ``.lock`` names a process that still exists) is refused;
-  a lock left by a run that was killed is taken over;
+* a folder that another live run holds is refused: the run holds an exclusive ``flock`` on the
+  folder's ``.lock`` (which names its process) for as long as it runs, and the system releases it
+  when the process ends in any way, so a lock file left by a run that was killed is free and is
+  taken over; two runs started together cannot both take the folder (the lock is taken atomically,
+  after the checks);
 * a folder that holds the results of an earlier run is refused unless ``overwrite``, which first
   removes those results (history, run summary, VTK and XDMF files, checkpoints), so that no file of
   the old run sits beside the new one;
@@ -14,6 +17,7 @@ The refusals are :class:`FolderError` with the path and the fix; every rank rais
 """
 from __future__ import annotations
 
+import fcntl
 import os
 import pathlib
 import shutil
@@ -26,19 +30,28 @@ class FolderError(ValueError):
     """An output folder that cannot be used; the message names it and the fix."""
 
 
-def _alive(pid: int) -> bool:
-    """Whether a process ``pid`` runs (a zombie, killed but not yet reaped, does not)."""
+def _holder(lock: pathlib.Path) -> int | None:
+    """The process holding the lock ``lock`` (its pid as the file names it, -1 if unreadable), or None
+    when no live process holds it (no file, or one left by a run that ended or was killed)."""
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
+        fd = os.open(lock, os.O_RDONLY)
+    except OSError:
+        return None
     try:
-        state = pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return True
-    return state not in ("Z", "X")
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        return None
+    except BlockingIOError:
+        try:
+            return int(os.read(fd, 64).split()[0])
+        except (ValueError, IndexError, OSError):
+            return -1
+    finally:
+        os.close(fd)                         # (releases the shared lock if it was taken)
+
+
+def _busy(p: pathlib.Path, pid: int) -> str:
+    who = f"process {pid}" if pid > 0 else "a process"
+    return f"--out {p}: another run ({who}) is writing there: wait for it or choose another folder"
 
 
 def _old_results(p: pathlib.Path) -> list[str]:
@@ -58,14 +71,9 @@ def check(path, overwrite: bool = False, restart: bool = False) -> str | None:
         return f"--out {p}: cannot create the folder ({parent} is a file): choose another place"
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"--out {p}: {'the folder' if parent == p else parent} is not writable: choose another place"
-    lock = p / ".lock"                       # (a folder still to be made has no lock and no results)
-    if lock.exists():
-        try:
-            pid = int(lock.read_text().split()[0])
-        except (ValueError, IndexError, OSError):
-            pid = -1
-        if pid > 0 and _alive(pid):
-            return f"--out {p}: another run (process {pid}) is writing there: wait for it or choose another folder"
+    pid = _holder(p / ".lock")               # (a folder still to be made has no lock and no results)
+    if pid is not None:
+        return _busy(p, pid)
     old = _old_results(p)
     if restart:
         if not (p / "checkpoint" / "meta.json").exists():
@@ -84,6 +92,29 @@ class RunFolder:
         self.path, self.overwrite, self.restart = pathlib.Path(path), overwrite, restart
         self.comm = comm or MPI.COMM_WORLD
         self.lock = self.path / ".lock"
+        self._fd = None
+
+    def _acquire(self) -> int:
+        """Take the folder's lock (an exclusive flock on .lock, held until the run ends); its file
+        descriptor. Another run may have taken it since the checks, or may be removing the file as
+        it ends (then the lock taken is on a file no longer in the folder: try again)."""
+        for _ in range(20):
+            fd = os.open(self.lock, os.O_CREAT | os.O_RDWR, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(fd)
+                raise FolderError(_busy(self.path, _holder(self.lock) or -1)) from None
+            try:
+                current = os.stat(self.lock).st_ino == os.fstat(fd).st_ino
+            except FileNotFoundError:
+                current = False
+            if current:
+                os.ftruncate(fd, 0)
+                os.write(fd, f"{os.getpid()}\n".encode())
+                return fd
+            os.close(fd)
+        raise FolderError(f"--out {self.path}: could not take the folder's lock: choose another folder")
 
     def _take(self) -> None:
         p = self.path
@@ -95,15 +126,8 @@ class RunFolder:
         except OSError as err:
             raise FolderError(f"--out {p}: cannot create the folder ({err.strerror}): choose another "
                               "place") from None
+        self._fd = self._acquire()
         old = [] if self.restart else _old_results(p)      # a restart goes on where it stopped
-        self.lock.unlink(missing_ok=True)                   # left by a run that was killed (check)
-        try:
-            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        except FileExistsError:
-            raise FolderError(f"--out {p}: another run took the folder just now: choose another "
-                              "folder") from None
-        with os.fdopen(fd, "w") as fh:
-            fh.write(f"{os.getpid()}\n")
         for f in old:
             target = p / f
             if target.is_dir():
@@ -117,6 +141,8 @@ class RunFolder:
         return self
 
     def __exit__(self, *exc):
-        if self.comm.rank == 0:
+        if self._fd is not None:             # rank 0: remove the file while still holding it
             self.lock.unlink(missing_ok=True)
+            os.close(self._fd)
+            self._fd = None
         return False

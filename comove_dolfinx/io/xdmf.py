@@ -5,8 +5,13 @@
 ``plastic_strain`` (equivalent, elastic-plastic bodies), the normal stress along convected fibres
 (``fibres``: physical components on the convected base, cell averages, e.g. the ring's hoop stress)
 and, for every contact item, ``contact_pressure`` (and ``contact_shear`` with friction) on the
-contact boundary. In ParaView: open the .xdmf (reader "Xdmf3ReaderT"), apply "Warp By Vector" with
-the displacement to see the deformed body.
+contact boundary.
+
+Each field is its own XDMF time series on its own grid (dolfinx's XDMFFile writes them so): ParaView's
+XDMF readers show one block per field, and "Warp By Vector" warps only the displacement's block, so a
+deformed body coloured by a stress needs the blocks merged first. For ParaView use the VTK writer
+(io/vtk.py, the command's default: every field of an increment on one grid); this one is for
+tools that read dolfinx's XDMF (dolfinx itself, meshio's XDMF time series per field).
 """
 from __future__ import annotations
 

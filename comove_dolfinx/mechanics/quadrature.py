@@ -65,9 +65,15 @@ class QuadratureRule:
         return compat.evaluate(expression, self.mesh, self.cells).reshape(self.size, -1)
 
     def cell_average(self, values: np.ndarray) -> np.ndarray:
-        """Quadrature-weighted cell averages of per-point values (points, ...) -> (cells, ...)."""
+        """Cell averages of per-point values (points, ...) -> (cells, ...): the integral over each cell
+        (of the mesh as it is, curved cells too: the weights times |det J| at the points) divided by
+        its area."""
+        if getattr(self, "_average_weights", None) is None:
+            detJ = ufl.JacobianDeterminant(self.mesh)
+            w = self.weights * np.abs(self.evaluate(self.expression(detJ)).reshape(-1, self.npts))
+            self._average_weights = w / w.sum(axis=1, keepdims=True)
         v = values.reshape((len(self.cells), self.npts) + values.shape[1:])
-        return np.tensordot(self.weights / self.weights.sum(), v, axes=([0], [1]))
+        return np.einsum("cq,cq...->c...", self._average_weights, v)
 
 
 class CellInterpolator:
