@@ -8,6 +8,7 @@ import re
 import launch
 import numpy as np
 import pytest
+from mpi4py import MPI
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 REFERENCE = pathlib.Path(__file__).resolve().parent / "reference"
@@ -99,3 +100,31 @@ def test_steps_ramp_hold_and_reverse():
         cm.Step(0)
     with pytest.raises(cm.JobError, match="not an item of the job"):
         cm.Job(body, items, [cm.Step(1, ramp={cm.Pressure("top", 1.0): 1.0})]).run()
+
+
+def test_a_mesh_made_with_dolfinx():
+    """A strip made by dolfinx itself (create_rectangle, facet tags by hand) stretched by 1e-4 in
+    plane stress, with rollers on its left and bottom edges: the uniaxial closed form, end force
+    E eps H (the finite-strain terms are 1e-4 of it). A tag value that no facet carries is refused."""
+    import dolfinx
+
+    import comove_dolfinx as cm
+    L, H, E, eps = 2.0, 0.5, 100.0, 1e-4
+    msh = dolfinx.mesh.create_rectangle(MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([L, H])], [8, 2],
+                                        cell_type=dolfinx.mesh.CellType.triangle)
+    edges = {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[0], L),
+             3: lambda x: np.isclose(x[1], 0.0)}
+    found = [(dolfinx.mesh.locate_entities_boundary(msh, 1, where), tag) for tag, where in edges.items()]
+    facets = np.concatenate([f for f, _ in found])
+    values = np.concatenate([np.full(len(f), tag, dtype=np.int32) for f, tag in found])
+    order = np.argsort(facets)
+    tags = dolfinx.mesh.meshtags(msh, 1, facets[order].astype(np.int32), values[order])
+    mesh = cm.from_dolfinx(msh, tags, {"left": 1, "right": 2, "bottom": 3})
+    body = cm.Body(mesh, "plane_stress", cm.Elastic(E, 0.3), update="sr")
+    items = [cm.Fixed("left", component=0), cm.Fixed("bottom", component=1),
+             cm.Displacement("right", eps * L, component=0)]
+    res = cm.Job(body, items, [cm.Step(1)], [cm.Reaction("right", "end")]).run()
+    assert res.completed
+    assert res["end_fx"][-1] == pytest.approx(E * eps * H, rel=1e-3)
+    with pytest.raises(cm.MeshError, match="no facet carries"):
+        cm.from_dolfinx(msh, tags, {"left": 1, "top": 9})

@@ -26,3 +26,16 @@ def test_versioned_apis_only_in_compat(path):
         code = re.sub(r"compat\.\w+", "", line.split("#", 1)[0])   # calls into compat are the point
         bad += [f"{path.name}:{n}: {line.strip()}" for pat in VERSIONED if re.search(pat, code)]
     assert not bad, "\n".join(bad)
+
+
+def test_the_version_check_names_the_tested_levels(monkeypatch):
+    """The installed level passes; any other (an older, a between, a newer one) is refused with a
+    message naming the three tested levels and the version found."""
+    from comove_dolfinx import compat
+    compat.check_version()
+    for level in ("0.7", "0.10", "0.12"):
+        monkeypatch.setattr(compat, "LEVEL", level)
+        monkeypatch.setattr(compat.dolfinx, "__version__", level + ".0")
+        with pytest.raises(SystemExit) as err:
+            compat.check_version()
+        assert all(v in str(err.value) for v in ("0.5", "0.9", "0.11", f"found {level}.0")), str(err.value)
