@@ -203,7 +203,7 @@ def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     if add is not None:
         with b.localForm() as loc:
-            loc.array[add[0]] += add[1]
+            np.add.at(loc.array, add[0], add[1])       # (a dof may appear in two items)
     if a is None:
         return
     _set_bc(b, bcs, x, alpha)

@@ -52,6 +52,10 @@ class Step:
     ``predictor``: where each increment starts, "none" (the last converged state), "linear" or
     "quadratic" (extrapolation of the last converged states) or "tangent" (Euler step along the
     path's tangent, docs/theory.md section 7.2). ``max_cutbacks``: halvings of a failed increment.
+    ``release``: supports (``Fixed``, ``Displacement``) taken away at the start of the step: the
+    force each exerted there becomes a nodal force that the step ramps down to 0 (or to the target
+    ``ramp`` gives it, as a fraction of that force), so the body is let go smoothly, e.g. a clamp
+    opened after forming; a released support stays released.
     """
 
     n: int = 10
@@ -59,8 +63,10 @@ class Step:
     predictor: str = "none"
     max_cutbacks: int = 6
     name: str = ""
+    release: tuple = ()
 
     def __post_init__(self):
+        self.release = tuple(self.release) if isinstance(self.release, (list, tuple)) else (self.release,)
         if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or not 1 <= self.n <= 10**6:
             raise JobError(f"step {self.name or ''} n = {self.n!r}: give a whole number of increments "
                            "from 1 to 1000000")
@@ -74,18 +80,33 @@ class Step:
         return StepSettings(n_steps=int(self.n), max_cutbacks=self.max_cutbacks,
                             predictor=PREDICTORS[self.predictor])
 
-    def start(self, items) -> None:
-        """Set every item's ramp for this step."""
+    def check(self, items) -> None:
+        """JobError if the step names an item that is not the job's, or releases what is not a
+        support."""
+        for k in list(self.ramp or {}) + list(self.release):
+            if not any(k is item for item in items):
+                verb = "ramps" if k in (self.ramp or {}) else "releases"
+                raise JobError(f"step {self.name!r} {verb} {k!r}, which is not an item of the job")
+        for k in self.release:
+            if not callable(getattr(k, "release", None)):
+                raise JobError(f"step {self.name!r} releases {k!r}: only supports (Fixed, Displacement) "
+                               "can be released")
+
+    def start(self, items, model=None) -> None:
+        """Release the step's supports (with the model at its converged state), then set every
+        item's ramp for this step."""
+        self.check(items)
         ramp = self.ramp
-        if ramp is not None:
-            unknown = [k for k in ramp if not any(k is item for item in items)]
-            if unknown:
-                raise JobError(f"step {self.name!r} ramps {unknown[0]!r}, which is not an item of the job")
+        for item in self.release:
+            if not item.released:
+                model.release(item)
         for item in items:
-            if ramp is None:
-                item.ramp(1.0)
-            elif any(item is k for k in ramp):
+            if ramp is not None and any(item is k for k in ramp):
                 item.ramp(next(v for k, v in ramp.items() if k is item))
+            elif any(item is k for k in self.release):
+                item.ramp(0.0)
+            elif ramp is None and not getattr(item, "released", False):
+                item.ramp(1.0)
             else:
                 item.hold()
 
@@ -230,8 +251,11 @@ class Job:
                 newton.poll = interrupts.check
                 for k, step in enumerate(self.steps):
                     if saved is not None and k < saved[0]["step_index"]:
-                        continue                               # done before the checkpoint
-                    step.start(self.items)
+                        step.start(self.items, model)          # done before the checkpoint: its
+                        continue                               # releases (the restore sets the rest)
+                    step.start(self.items, model)
+                    if step.release:
+                        newton.factorised = False     # its tangent still holds the supports
                     solver = IncrementalSolver(model, step.settings(), newton)
                     run.solver, run.step_index = solver, k
                     resume = None

@@ -114,6 +114,7 @@ class Displacement(Item):
 
     def __init__(self, boundary: str, value=None, component: int | None = None, field=None):
         super().__init__(boundary)
+        self._released: np.ndarray | None = None      # the support's force when a step released it
         if component not in (None, 0, 1):
             raise ItemError(f"component = {component!r}: use 0 (x), 1 (y) or None (both)")
         if value is not None and field is not None:
@@ -128,14 +129,15 @@ class Displacement(Item):
         if self.field is not None:
             if self.component is None:
                 self._g = fem.Function(V)
-                self.bcs = [fem.dirichletbc(self._g, fem.locate_dofs_topological(V, fdim, facets))]
+                dofs = fem.locate_dofs_topological(V, fdim, facets)
+                self.bcs = [fem.dirichletbc(self._g, dofs)]
             else:
                 Vc = V.sub(self.component).collapse()[0]
                 self._g = fem.Function(Vc)
                 dofs = fem.locate_dofs_topological((V.sub(self.component), Vc), fdim, facets)
                 self.bcs = [fem.dirichletbc(self._g, dofs, V.sub(self.component))]
-            return None
-        if self.component is None:
+                dofs = dofs[0]
+        elif self.component is None:
             self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
             dofs = fem.locate_dofs_topological(V, fdim, facets)
             self.bcs = [fem.dirichletbc(self._c, dofs, V)]
@@ -143,9 +145,58 @@ class Displacement(Item):
             self._c = fem.Constant(ctx.mesh, PETSc.ScalarType(0.0))
             dofs = fem.locate_dofs_topological(V.sub(self.component), fdim, facets)
             self.bcs = [fem.dirichletbc(self._c, dofs, V.sub(self.component))]
+        # the constrained entries of the (unrolled) vectors that this rank owns: a released
+        # support's force acts there
+        bs, n = V.dofmap.index_map_bs, V.dofmap.index_map.size_local
+        dofs = np.asarray(dofs, dtype=np.int64)
+        if self.component is None:
+            dofs = (bs * dofs[:, None] + np.arange(bs)).ravel()
+        self._dofs = np.sort(dofs[dofs // bs < n]).astype(np.int32)
+        self._size = ctx.u.x.array.size
+        if self._released is not None:
+            self.bcs = []
         return None
 
+    @property
+    def released(self) -> bool:
+        return self._released is not None
+
+    def release(self, residual: np.ndarray) -> None:
+        """Take the support away at the start of a step (:class:`job.Step` ``release``): its
+        Dirichlet conditions go, and the force it exerted becomes a dead nodal force scaled by the
+        factor, set to 1 here (the body stays in equilibrium) and ramped by the step, to 0 unless
+        the step says otherwise. ``residual``: this rank's entries of the residual R = f_int - f_ext
+        at the converged state, without Dirichlet conditions (at a constrained dof, the force the
+        support exerts). A released support stays released."""
+        self._released = np.asarray(residual, dtype=float)[self._dofs].copy()
+        self.bcs = []
+        self.set_factor(1.0)
+
+    def nodal(self):
+        if self._released is None:
+            return None
+        return self._dofs, self.factor * self._released
+
     def _apply(self, factor):
+        if self._released is not None:
+            return                         # the factor scales the released force (nodal)
+        self._apply_displacement(factor)
+
+    def save_state(self) -> dict:
+        state = super().save_state()
+        if self._released is not None:                # a field on the nodes (any partition)
+            full = np.zeros(self._size)
+            full[self._dofs] = self._released
+            state["released"] = ("V", full)
+        return state
+
+    def load_state(self, state: dict) -> None:
+        if "released" in state:
+            self._released = np.asarray(state["released"], dtype=float).ravel()[self._dofs].copy()
+            self.bcs = []
+        super().load_state(state)
+
+    def _apply_displacement(self, factor):
         if self.field is not None:
             self._g.interpolate(lambda x: self.field(x, factor))
             self._g.x.scatter_forward()

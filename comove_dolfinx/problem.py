@@ -24,7 +24,8 @@
     obstacle = { type = "plane", point = [0, 5.715], normal = [0, -1], motion = [0, -3.3] }
     mu = 0.1
 
-    [[steps]]                    # n increments; ramp: item name -> target factor (others hold)
+    [[steps]]                    # n increments; ramp: item name -> target factor (others hold);
+                                 # release: support items taken away (their force ramped to 0)
     n = 36
     predictor = "tangent"
 
@@ -88,7 +89,7 @@ def _check(where: str, table: dict, spec: dict, required=()) -> dict:
             ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
         elif kind is int:
             ok = isinstance(value, int) and not isinstance(value, bool)
-        elif kind in (str, bool, dict):
+        elif kind in (str, bool, dict, list):
             ok = isinstance(value, kind)
         elif kind in ("vector", "vector|number"):
             ok = (isinstance(value, list) and len(value) == 2 and all(
@@ -101,7 +102,7 @@ def _check(where: str, table: dict, spec: dict, required=()) -> dict:
                                                             for v in p) for p in value)
         if not ok:
             want = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false",
-                    dict: "a table", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
+                    dict: "a table", list: "a list of item names", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
                     "vector|number": "a finite number or [x, y]"}[kind]
             raise ProblemError(f"{where}: {key} = {value!r}: give {want}")
     for key in required:
@@ -180,7 +181,12 @@ def read(path) -> dict:
     steps = data.get("steps", [{}])
     for k, step in enumerate(steps, 1):
         _check(f"{path}: [[steps]] {k}", step, {"n": int, "predictor": str, "max_cutbacks": int, "ramp": dict,
-                                                "name": str})
+                                                "name": str, "release": list})
+        supports = [n for n, i in names.items() if data["items"][i - 1]["type"] in ("fixed", "displacement")]
+        for key in step.get("release", []):
+            if key not in supports:
+                raise ProblemError(f"{path}: [[steps]] {k} release: {key!r} is not a support item; the supports "
+                                   f"are {', '.join(supports) or 'none'}")
         for key, target in step.get("ramp", {}).items():
             if key not in names:
                 raise ProblemError(f"{path}: [[steps]] {k} ramp: no item named {key!r}; the items are "
@@ -238,7 +244,8 @@ def build(data: dict, comm, writers=()):
         named[name] = item
     steps = [Step(st.get("n", 10), ramp={named[k]: v for k, v in st["ramp"].items()} if "ramp" in st else None,
                   predictor=st.get("predictor", "none"), max_cutbacks=st.get("max_cutbacks", 6),
-                  name=st.get("name", "")) for st in data["steps"]]
+                  name=st.get("name", ""), release=[named[k] for k in st.get("release", [])])
+             for st in data["steps"]]
     plist = []
     for spec in data.get("probes", []):
         s = dict(spec)

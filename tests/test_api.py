@@ -66,6 +66,9 @@ BAD = [
      "[[steps]]\nramp = {load = 1.0}\n", "no item named 'load'"),
     ("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 1.0\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
      "material = {E = -1.0, nu = 0.3}\n[[items]]\ntype = 'fixed'\nboundary = 'left'\n", "E = -1"),
+    ("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 1.0\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
+     "material = {E = 1.0, nu = 0.3}\n[[items]]\ntype = 'pressure'\nboundary = 'top'\np = 1.0\n"
+     "[[steps]]\nrelease = ['pressure1']\n", "'pressure1' is not a support item"),
     ("[mesh\n", "not valid TOML"),
 ]
 
@@ -128,3 +131,82 @@ def test_a_mesh_made_with_dolfinx():
     assert res["end_fx"][-1] == pytest.approx(E * eps * H, rel=1e-3)
     with pytest.raises(cm.MeshError, match="no facet carries"):
         cm.from_dolfinx(msh, tags, {"left": 1, "top": 9})
+
+
+def _stretch_and_release(checkpoint=None, stop_after=None):
+    """An elastic strip (plane stress, rollers on its left and bottom edges) stretched by a
+    prescribed end displacement d in 2 increments, then let go: step 2 releases that support."""
+    import comove_dolfinx as cm
+    from comove_dolfinx.io.writers import Writer
+    L, H, E, d = 2.0, 0.5, 100.0, 2e-4
+    body = cm.Body(cm.rectangle(L, H, 0.25, order=2), "plane_stress", cm.Elastic(E, 0.3), update="sr")
+    pull = cm.Displacement("right", d, component=0)
+    items = [cm.Fixed("left", component=0), cm.Fixed("bottom", component=1), pull]
+
+    class Stop(Writer):
+        def write(self, run, row, increment):
+            if stop_after is not None and row["step"] == stop_after:
+                raise RuntimeError("stopped by the test")
+    writers = ([checkpoint] if checkpoint is not None else []) + [Stop()]
+    probes = [cm.Reaction("right", "end"), cm.Reaction("left", "clamp"),
+              cm.NodeDisplacement("tip", (L, H), component=0)]
+    return cm.Job(body, items, [cm.Step(2), cm.Step(4, release=[pull])], probes, writers=writers), (E, H, L, d)
+
+
+def test_a_released_support_lets_the_body_go_along_the_elastic_line(tmp_path):
+    """Step 2 takes away the support that stretched the strip: its force (E d / L H at the end of
+    step 1) becomes a nodal force ramped to zero, so the support reports no force, the clamp
+    balances the ramped force exactly (equilibrium), and the end comes back along the elastic line
+    u = (1 - s) d to the unstretched strip. A checkpoint taken inside the release step restarts
+    to the same history; releasing what is not a support is refused."""
+    import comove_dolfinx as cm
+    from comove_dolfinx.io.checkpoint import Checkpoint
+    job, (E, H, L, d) = _stretch_and_release()
+    res = job.run()
+    assert res.completed and len(res) == 6
+    F1 = res["end_fx"][1]
+    assert F1 == pytest.approx(E * d / L * H, rel=1e-3)
+    s = res["time"][2:] - 1.0                                    # the release step's fraction
+    assert np.all(np.abs(res["end_fx"][2:]) <= 1e-8 * F1)       # gone (Newton tolerance)
+    np.testing.assert_allclose(res["clamp_fx"][2:], -(1.0 - s) * F1, atol=1e-8 * F1)
+    np.testing.assert_allclose(res["tip_ux"][2:], (1.0 - s) * d, atol=1e-3 * d)
+    # killed (here: a writer fails) in the middle of the release step, then restarted
+    folder = tmp_path / "checkpoint"
+    stopped, _ = _stretch_and_release(Checkpoint(folder, every=1, interval=0.0), stop_after=4)
+    with pytest.raises(RuntimeError, match="stopped by the test"):
+        stopped.run()
+    again, _ = _stretch_and_release(Checkpoint(folder, every=1, interval=0.0))
+    res2 = again.run(restart=folder)
+    assert res2.completed and res2.newton_its == res.newton_its
+    for col in ("end_fx", "clamp_fx", "tip_ux"):
+        np.testing.assert_allclose(res2[col], res[col], rtol=0, atol=1e-12 * max(abs(res[col]).max(), 1e-300))
+    # the same problem from a problem file: the same history
+    from comove_dolfinx import problem
+    toml = tmp_path / "release.toml"
+    toml.write_text(
+        "[mesh]\nbuilder = 'rectangle'\nL = 2.0\nH = 0.5\nsize = 0.25\norder = 2\n"
+        "[body]\nkind = 'plane_stress'\nupdate = 'sr'\nmaterial = {E = 100.0, nu = 0.3}\n"
+        "[[items]]\ntype = 'fixed'\nboundary = 'left'\ncomponent = 0\n"
+        "[[items]]\ntype = 'fixed'\nboundary = 'bottom'\ncomponent = 1\n"
+        "[[items]]\ntype = 'displacement'\nname = 'pull'\nboundary = 'right'\nvalue = 2e-4\ncomponent = 0\n"
+        "[[steps]]\nn = 2\n[[steps]]\nn = 4\nrelease = ['pull']\n"
+        "[[probes]]\ntype = 'reaction'\nboundary = 'left'\nname = 'clamp'\n")
+    res3 = problem.build(problem.read(toml), MPI.COMM_WORLD).run()
+    assert res3.completed and res3.newton_its == res.newton_its
+    np.testing.assert_allclose(res3["clamp_fx"], res["clamp_fx"], rtol=0, atol=1e-12 * F1)
+    with pytest.raises(cm.JobError, match="only supports"):
+        pressure = cm.Pressure("top", 1.0)
+        body = cm.Body(cm.rectangle(1.0, 1.0, 0.5), "plane_strain", cm.Elastic(1.0, 0.3))
+        cm.Job(body, [cm.Fixed("bottom"), pressure], [cm.Step(1, release=[pressure])]).run()
+
+
+@pytest.mark.mpi
+def test_a_released_support_on_two_ranks():
+    """The release of the test above on however many ranks run it: the same elastic line."""
+    job, (E, H, L, d) = _stretch_and_release()
+    res = job.run()
+    F1 = res["end_fx"][1]
+    s = res["time"][2:] - 1.0
+    assert res.completed and F1 == pytest.approx(E * d / L * H, rel=1e-3)
+    np.testing.assert_allclose(res["clamp_fx"][2:], -(1.0 - s) * F1, atol=1e-8 * F1)
+    np.testing.assert_allclose(res["tip_ux"][2:], (1.0 - s) * d, atol=1e-3 * d)

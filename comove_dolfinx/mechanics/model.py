@@ -107,7 +107,6 @@ class Model:
         self.state = QuadratureState(self.rule, self.plastic, body.kind, body.degree)
         self.items = list(items)
         self.load = 0.0
-        self.bcs: list = []
         self._generation = 0                   # counts the changes of the converged state
         self._evaluated = None                 # (key, u) of the state's last evaluation
 
@@ -158,7 +157,6 @@ class Model:
             term = item.attach(ctx)
             if term is not None:
                 R = R + term
-        self.bcs = [bc for item in self.items for bc in item.bcs]
         # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
         # and, in plane-stress plasticity, the thickness stretch's part
         dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
@@ -185,6 +183,19 @@ class Model:
         parts.append(ufl.as_vector([ufl.det(self.update.F(u))]))
         self._eval = self.rule.expression(ufl.as_vector([c for p in parts for c in p]))
         self.set_load(0.0)
+
+    @property
+    def bcs(self) -> list:
+        """The Dirichlet conditions of the items as they stand (a step may release a support)."""
+        return [bc for item in self.items for bc in item.bcs]
+
+    def release(self, item) -> None:
+        """Take a support away (loads.Displacement.release): its force at the converged state,
+        the residual at its dofs, becomes a nodal force that the step ramps down."""
+        b = compat.create_vector(self.residual_form)
+        compat.assemble_vector(b, self.residual_form, add=self.nodal_loads())
+        item.release(b.array)
+        b.destroy()
 
     @property
     def internal_force_form(self):
@@ -344,9 +355,10 @@ class Model:
     def reaction_forces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """Reference positions (n, 2) and forces (n, 2) that the supports exert on the nodes of a
         tagged boundary (this rank's owned nodes), taken from the residual at the current state:
-        at a constrained dof R = f_int - f_ext is the force the support must supply."""
+        at a constrained dof R = f_int - f_ext (nodal forces included) is the force the support
+        must supply (zero once a step released it)."""
         b = compat.create_vector(self.residual_form)
-        compat.assemble_vector(b, self.residual_form)
+        compat.assemble_vector(b, self.residual_form, add=self.nodal_loads())
         fdim = self.mesh.topology.dim - 1
         ft = self.meshdata.facet_tags
         facets = ft.indices[ft.values == self.meshdata.ds_id(name)]
