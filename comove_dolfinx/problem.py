@@ -65,7 +65,9 @@ ITEMS = {"fixed": {"boundary": str, "component": int},
                      "mu": float, "relag": bool}}
 OBSTACLES = {"plane": {"point": "vector", "normal": "vector", "motion": "vector"},
              "circle": {"centre": "vector", "radius": float, "motion": "vector"},
-             "profile": {"points": "points", "radius": float, "motion": "vector"}}
+             "profile": {"points": "points", "radius": float, "motion": "vector"},
+             "gmsh_profile": {"file": str, "curve": str, "radius": float, "spacing": float, "motion": "vector"}}
+OPTIONAL = ("motion", "spacing")
 PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": str},
           "contact_force": {"item": str, "column": str, "component": int, "scale": float},
           "contact_length": {"item": str, "column": str, "scale": float},
@@ -172,7 +174,11 @@ def read(path) -> dict:
                 raise ProblemError(f"{where}: obstacle type = {obs.get('type')!r}: choose one of "
                                    f"{', '.join(OBSTACLES)}")
             _check(f"{where} obstacle", obs, {"type": str, **OBSTACLES[obs["type"]]},
-                   required=[key for key in OBSTACLES[obs["type"]] if key != "motion"])
+                   required=[key for key in OBSTACLES[obs["type"]] if key not in OPTIONAL])
+            if "file" in obs:
+                obs["file"] = str((path.parent / obs["file"]).resolve())
+                if not pathlib.Path(obs["file"]).is_file():
+                    raise ProblemError(f"{where} obstacle: file = {obs['file']!r} does not exist: check the path")
         name = item.get("name", f"{kind}{k}")
         if name in names:
             raise ProblemError(f"{where}: the name {name!r} is taken by item {names[name]}: rename one")
@@ -235,7 +241,10 @@ def build(data: dict, comm, writers=()):
         if kind == "contact":
             o = dict(s.pop("obstacle"))
             otype = o.pop("type")
-            obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile}[otype](**o)
+            if "file" in o:
+                o["path"] = o.pop("file")
+            obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile,
+                        "gmsh_profile": c.Profile.from_gmsh}[otype](**o)
             item = c.Contact(s.pop("boundary"), obstacle, **s)
         else:
             cls = {"fixed": loads.Fixed, "displacement": loads.Displacement, "pressure": loads.Pressure,

@@ -69,6 +69,9 @@ BAD = [
     ("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 1.0\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
      "material = {E = 1.0, nu = 0.3}\n[[items]]\ntype = 'pressure'\nboundary = 'top'\np = 1.0\n"
      "[[steps]]\nrelease = ['pressure1']\n", "'pressure1' is not a support item"),
+    ("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 1.0\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
+     "material = {E = 1.0, nu = 0.3}\n[[items]]\ntype = 'contact'\nboundary = 'top'\n"
+     "obstacle = {type = 'gmsh_profile', file = 'die.geo', curve = 'face', radius = 0.1}\n", "does not exist"),
     ("[mesh\n", "not valid TOML"),
 ]
 

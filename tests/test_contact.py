@@ -4,7 +4,7 @@ import pytest
 from mpi4py import MPI
 
 from comove_dolfinx import geometry
-from comove_dolfinx.contact import Circle, Contact, ContactError, Plane
+from comove_dolfinx.contact import Circle, Contact, ContactError, Plane, Profile
 from comove_dolfinx.loads import Displacement, Fixed, Pressure, Traction
 from comove_dolfinx.mechanics.body import Body
 from comove_dolfinx.mechanics.material_data import Elastic, Hardening
@@ -69,6 +69,54 @@ def test_hertz_against_a_rigid_cylinder(hertz_mesh, method, theta):
     assert c.zone().extent == pytest.approx(a, rel=0.04)
     c.update_fields()
     assert c.boundary_values(c.pressure)[1].max() == pytest.approx(2 * P / (np.pi * a), rel=0.05)
+
+
+ARC_GEO = """SetFactory("OpenCASCADE");
+Circle(1) = {0, -4, 0, 3.99, Pi/2 - 0.1, Pi/2};
+Circle(2) = {0, -4, 0, 3.99, Pi/2, Pi/2 + 0.1};
+Physical Curve("face") = {2, 1};
+"""
+
+
+def test_a_profile_from_a_gmsh_curve(hertz_mesh, tmp_path):
+    """The top of a rigid cylinder R = 4 given as two arcs of radius 3.99 in a Gmsh script (listed
+    in the wrong order, so the chain must turn one), sampled every 0.02 and rounded by 0.01: its gap
+    is the cylinder's to within the sampling's sag s^2 / (8 R) = 1.25e-5, and the half-cylinder of
+    the Hertz test pressed onto it carries the load it carries on the exact Circle (0.1 % measured:
+    40 segments, whose compiled contact term once grew exponentially with their number). Unknown
+    names and missing files are refused in one line."""
+    geo = tmp_path / "arc.geo"
+    geo.write_text(ARC_GEO)
+    prof = Profile.from_gmsh(geo, "face", radius=0.01, spacing=0.02)
+    assert len(prof.points) == 41 and np.allclose(prof.points[20], (0.0, -0.01), atol=1e-12)
+    rng = np.random.default_rng(0)
+    th = rng.uniform(np.pi / 2 - 0.09, np.pi / 2 + 0.09, 200)
+    x = np.c_[np.cos(th), np.sin(th)] * rng.uniform(4.0, 4.1, 200)[:, None] + (0.0, -4.0)
+    exact = Circle((0.0, -4.0), 4.0).gap_np(x, np.zeros(2))
+    sag = 0.02 ** 2 / (8 * 3.99)
+    err = prof.gap_np(x, np.zeros(2)) - exact
+    assert np.all(err >= -1e-12) and err.max() <= 1.05 * sag      # the chords lie inside the arc
+    forces = []
+    for obstacle in (Circle((0.0, -4.0), 4.0), prof):
+        c = Contact("contact", obstacle, method="penalty", gamma0=100.0)
+        m = Model(Body(hertz_mesh, "plane_strain", Elastic(E, NU)),
+                  [Fixed("xsym", component=0), Displacement("top", -0.0095, component=1), c])
+        _solve(m, 2)
+        forces.append(c.force()[1])
+    assert forces[1] == pytest.approx(forces[0], rel=3e-3)
+    # the same obstacle from a problem file (its path relative to the file)
+    from comove_dolfinx import problem
+    toml = tmp_path / "p.toml"
+    toml.write_text("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 0.5\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
+                    "material = {E = 1.0, nu = 0.3}\n[[items]]\ntype = 'contact'\nboundary = 'top'\n"
+                    "obstacle = {type = 'gmsh_profile', file = 'arc.geo', curve = 'face', radius = 0.01, "
+                    "spacing = 0.02, motion = [0, -0.1]}\n")
+    job = problem.build(problem.read(toml), MPI.COMM_WORLD)
+    assert np.array_equal(job.items[0].obstacle.points, prof.points)
+    with pytest.raises(ContactError, match="no physical curve named 'edge'; the named curves are face"):
+        Profile.from_gmsh(geo, "edge", radius=0.01)
+    with pytest.raises(ContactError, match="no such file"):
+        Profile.from_gmsh(tmp_path / "none.geo", "face", radius=0.01)
 
 
 @pytest.fixture(scope="module")

@@ -129,10 +129,62 @@ class Profile(Obstacle):
         self.points, self.radius = pts, float(radius)
         self.segments = [(pts[i], pts[i + 1]) for i in range(len(pts) - 1)] or [(pts[0], pts[0])]
 
+    @classmethod
+    def from_gmsh(cls, path, curve, radius: float, spacing: float | None = None, motion=None) -> "Profile":
+        """The profile of the curves of a Gmsh geometry (a ``.geo`` script, ``.brep`` or ``.step``
+        file): ``curve`` is the name of a physical group of curves, or a list of curve tags, whose
+        curves join end to end (each is turned as needed to continue the chain). Every curve is
+        sampled at about ``spacing`` (default ``radius``) along its length, so a smooth curve of
+        curvature radius R is followed to within spacing^2 / (8 R); ``radius`` rounds the profile's
+        corners (as in the constructor). Gmsh is started and finalised here: call it outside a gmsh
+        session of your own."""
+        import pathlib
+        path = pathlib.Path(path)
+        if not path.is_file():
+            raise ContactError(f"profile file {path}: no such file: give the path of a .geo, .brep or .step file")
+        if not (math.isfinite(radius) and radius > 0):
+            raise ContactError(f"radius = {radius}: the corners' radius must be a finite number > 0")
+        spacing = float(radius if spacing is None else spacing)
+        if not (math.isfinite(spacing) and spacing > 0):
+            raise ContactError(f"spacing = {spacing}: give a finite number > 0")
+        from ..geometry import gmsh_session
+        gmsh = gmsh_session.gmsh
+        gmsh_session.start()
+        try:
+            try:
+                gmsh.open(str(path))
+            except Exception as err:                  # noqa: BLE001 - gmsh raises plain Exception
+                raise ContactError(f"profile file {path}: gmsh cannot read it ({err})") from None
+            if isinstance(curve, str):
+                groups = {gmsh.model.getPhysicalName(1, t): t for _, t in gmsh.model.getPhysicalGroups(1)}
+                if curve not in groups:
+                    raise ContactError(f"profile file {path}: no physical curve named {curve!r}; the named "
+                                       f"curves are {', '.join(sorted(groups)) or 'none'}")
+                tags = list(gmsh.model.getEntitiesForPhysicalGroup(1, groups[curve]))
+            else:
+                tags = [int(t) for t in curve]
+                known = {t for _, t in gmsh.model.getEntities(1)}
+                if not tags or any(t not in known for t in tags):
+                    raise ContactError(f"profile file {path}: curve tags {tags}: the file's curves are "
+                                       f"{sorted(known)}")
+            pieces = []
+            for tag in tags:
+                lo, hi = (float(v[0]) for v in gmsh.model.getParametrizationBounds(1, tag))
+                fine = np.reshape(gmsh.model.getValue(1, tag, np.linspace(lo, hi, 401)), (-1, 3))[:, :2]
+                length = float(np.linalg.norm(np.diff(fine, axis=0), axis=1).sum())
+                n = max(int(math.ceil(length / spacing)), 1)
+                pieces.append(np.reshape(gmsh.model.getValue(1, tag, np.linspace(lo, hi, n + 1)), (-1, 3))[:, :2])
+        finally:
+            gmsh_session.stop()
+        return cls(_chain(pieces, path), radius, motion)
+
     def _nearest(self, x, d):
-        """Nearest point of the polyline to x (UFL): the segments' nearest points, the closest kept."""
+        """Nearest point of the polyline to x (UFL): the segments' nearest points, the closest kept,
+        chosen pairwise in a balanced tree (a chain of choices, each referring to the one before,
+        makes the differentiated form grow exponentially with the segments; the tree keeps its depth
+        at log2 of their number)."""
         d = self.d if d is None else d
-        best, best_d2 = None, None
+        cands = []
         for a, b in self.segments:
             a_, ab = ufl.as_vector(a) + d, b - a
             L2 = float(ab @ ab)
@@ -143,14 +195,17 @@ class Profile(Obstacle):
             else:
                 c = a_
             r = x - c
-            d2 = ufl.dot(r, r)
-            if best is None:
-                best, best_d2 = c, d2
-            else:
-                closer = ufl.lt(d2, best_d2)
-                best = ufl.as_vector([ufl.conditional(closer, c[i], best[i]) for i in range(2)])
-                best_d2 = ufl.conditional(closer, d2, best_d2)
-        return best, best_d2
+            cands.append((c, ufl.dot(r, r)))
+        while len(cands) > 1:
+            merged = []
+            for (c1, d1), (c2, d2) in zip(cands[0::2], cands[1::2]):
+                closer = ufl.lt(d2, d1)
+                merged.append((ufl.as_vector([ufl.conditional(closer, c2[i], c1[i]) for i in range(2)]),
+                               ufl.conditional(closer, d2, d1)))
+            if len(cands) % 2:
+                merged.append(cands[-1])
+            cands = merged
+        return cands[0]
 
     def gap(self, x, d=None):
         _, d2 = self._nearest(x, d)
@@ -168,3 +223,21 @@ class Profile(Obstacle):
             s = np.clip((x - a - d) @ ab / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(x))
             dist = np.minimum(dist, np.linalg.norm(x - a - d - s[:, None] * ab, axis=1))
         return dist - self.radius
+
+
+def _chain(pieces: list[np.ndarray], path) -> np.ndarray:
+    """The sampled curves joined end to end into one polyline (a curve is reversed to continue the
+    chain; the first is turned to meet the second)."""
+    scale = max(float(np.ptp(np.concatenate(pieces), axis=0).max()), 1.0)
+    tol = 1e-8 * scale
+    line = pieces[0]
+    if len(pieces) > 1 and min(np.linalg.norm(line[0] - pieces[1][[0, -1]], axis=1)) < tol:
+        line = line[::-1]
+    for k, p in enumerate(pieces[1:], 2):
+        if np.linalg.norm(p[-1] - line[-1]) < tol:
+            p = p[::-1]
+        if np.linalg.norm(p[0] - line[-1]) >= tol:
+            raise ContactError(f"profile file {path}: curve {k} of the chain does not start where curve "
+                               f"{k - 1} ends: list the curves in order along the profile")
+        line = np.vstack([line, p[1:]])
+    return line
