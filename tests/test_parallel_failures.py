@@ -3,7 +3,7 @@
 Each case runs a small plastic block on two ranks in a process of its own (mpirun or mpiexec, with a time limit:
 a deadlock shows as a timeout) and injects a failure on one rank only: the return map raising at that
 rank's points, a callback (a file write) failing on rank 0, an error out of one rank's share of the
-linear solve. The ranks must agree: a failed constitutive update or linear solve is a failed Newton
+linear solve, the mesh cache's file written by rank 0 alone. The ranks must agree: a failed constitutive update or linear solve is a failed Newton
 iteration, so every rank cuts the increment back and the run goes on to the same end; a failed
 callback stops every rank with the same error.
 """
@@ -82,6 +82,27 @@ report(f"completed={res.completed} increments={len(res.increments)} "
 """
 
 
+MESH_CACHE = """
+import sys
+from mpi4py import MPI
+from comove_dolfinx import geometry
+from comove_dolfinx.geometry import meshes
+comm = MPI.COMM_WORLD
+if comm.rank == 0:                   # rank 0 alone writes the cache: its write fails
+    def full(*args, **kwargs):
+        raise OSError("injected: disk full")
+    meshes.gmsh.write = full
+try:
+    geometry.rectangle(1.0, 0.5, 0.25, order=2, comm=comm, cache_dir=sys.argv[1])
+    text = "no error"
+except geometry.MeshError as err:
+    text = f"MeshError {'disk full' in str(err)}"
+lines = comm.gather(f"rank {comm.rank}: {text}")
+if comm.rank == 0:
+    print(chr(10).join(lines), flush=True)
+"""
+
+
 def _run_two_ranks(tmp_path, script, *args):
     path = tmp_path / "case.py"
     path.write_text(textwrap.dedent(script))
@@ -104,6 +125,11 @@ def test_return_map_failure_on_one_rank_cuts_back_on_both(tmp_path):
 def test_callback_failure_on_rank_0_stops_both_with_its_error(tmp_path):
     _, (r0, r1) = _run_two_ranks(tmp_path, CALLBACK)
     assert r0 == r1 == "OSError injected: disk full"
+
+
+def test_mesh_cache_failure_on_rank_0_is_every_rank_s_error(tmp_path):
+    _, (r0, r1) = _run_two_ranks(tmp_path, MESH_CACHE)
+    assert r0 == r1 == "MeshError True"
 
 
 def test_linear_solve_failure_on_one_rank_cuts_back_on_both(tmp_path):
