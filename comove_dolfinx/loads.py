@@ -153,8 +153,7 @@ class Displacement(Item):
             dofs = (bs * dofs[:, None] + np.arange(bs)).ravel()
         self._dofs = np.sort(dofs[dofs // bs < n]).astype(np.int32)
         self._size = ctx.u.x.array.size
-        if self._released is not None:
-            self.bcs = []
+        self._released = None              # a new model starts supported (a restart loads its state)
         return None
 
     @property
@@ -180,7 +179,11 @@ class Displacement(Item):
     def _apply(self, factor):
         if self._released is not None:
             return                         # the factor scales the released force (nodal)
-        self._apply_displacement(factor)
+        if self.field is not None:
+            self._g.interpolate(lambda x: self.field(x, factor))
+            self._g.x.scatter_forward()
+        elif self.value is not None:
+            self._c.value = factor * self.value
 
     def save_state(self) -> dict:
         state = super().save_state()
@@ -195,13 +198,6 @@ class Displacement(Item):
             self._released = np.asarray(state["released"], dtype=float).ravel()[self._dofs].copy()
             self.bcs = []
         super().load_state(state)
-
-    def _apply_displacement(self, factor):
-        if self.field is not None:
-            self._g.interpolate(lambda x: self.field(x, factor))
-            self._g.x.scatter_forward()
-        elif self.value is not None:
-            self._c.value = factor * self.value
 
 
 class Fixed(Displacement):

@@ -192,10 +192,17 @@ class Model:
     def release(self, item) -> None:
         """Take a support away (loads.Displacement.release): its force at the converged state,
         the residual at its dofs, becomes a nodal force that the step ramps down."""
+        item.release(self._support_forces())
+
+    def _support_forces(self) -> np.ndarray:
+        """This rank's owned entries of the residual R = f_int - f_ext (nodal forces included)
+        without Dirichlet conditions, at the current state: at a constrained dof, the force the
+        support supplies."""
         b = compat.create_vector(self.residual_form)
         compat.assemble_vector(b, self.residual_form, add=self.nodal_loads())
-        item.release(b.array)
+        out = b.array.copy()
         b.destroy()
+        return out
 
     @property
     def internal_force_form(self):
@@ -354,11 +361,9 @@ class Model:
 
     def reaction_forces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """Reference positions (n, 2) and forces (n, 2) that the supports exert on the nodes of a
-        tagged boundary (this rank's owned nodes), taken from the residual at the current state:
-        at a constrained dof R = f_int - f_ext (nodal forces included) is the force the support
-        must supply (zero once a step released it)."""
-        b = compat.create_vector(self.residual_form)
-        compat.assemble_vector(b, self.residual_form, add=self.nodal_loads())
+        tagged boundary (this rank's owned nodes), from the residual at the current state
+        (:meth:`_support_forces`; zero once a step released the support)."""
+        R = self._support_forces()
         fdim = self.mesh.topology.dim - 1
         ft = self.meshdata.facet_tags
         facets = ft.indices[ft.values == self.meshdata.ds_id(name)]
@@ -366,8 +371,7 @@ class Model:
         bs = self.V.dofmap.index_map_bs
         nodes = np.unique(dofs // bs)
         nodes = nodes[nodes < self.V.dofmap.index_map.size_local]
-        f = b.array.reshape(-1, bs)[nodes].copy()
-        b.destroy()
+        f = R.reshape(-1, bs)[nodes]
         return self.V.tabulate_dof_coordinates()[nodes, :2], f
 
     def reaction(self, name: str) -> np.ndarray:
