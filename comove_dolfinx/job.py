@@ -212,6 +212,8 @@ class Job:
         ``restart``: a checkpoint folder (io.Checkpoint) to go on from, on any number of ranks."""
         t_start, before = time.perf_counter(), process_clock()[0]
         timer = Timer()
+        for item in self.items:              # the same items may serve an earlier run
+            item.reset()
         with timer("setup and compilation"):
             model = Model(self.body, self.items)
             model.finalize(self.form_options)

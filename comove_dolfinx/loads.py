@@ -4,6 +4,8 @@ Every item follows one protocol (contact items too, contact/item.py):
 
 * ``attach(ctx)``: build its UFL residual term (or None) and its Dirichlet conditions from the
   model's :class:`mechanics.model.Context`; called once, when the model is compiled;
+* ``reset()``: back to the start of a run (factor 0, no step's ramp, supports in place): a
+  :class:`job.Job` resets its items before each run, so the same items serve several runs;
 * ``set(t)``: the state at load factor t of the current step (amplitudes are Constants, so nothing
   is recompiled);
 * ``commit()`` / ``restore()``: at a converged / failed increment (history-dependent items);
@@ -44,7 +46,12 @@ class Item:
     def __init__(self, name: str | None = None):
         self.name = name
         self.bcs: list = []
-        self._start, self._target = 0.0, 1.0      # without a Step: from 0 to 1 over the load range
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the start of a run: factor 0, ramped from 0 to 1 over the load range unless a
+        Step says otherwise (a Job calls it before each run)."""
+        self._start, self._target = 0.0, 1.0
         self._path: Callable[[float], float] | None = None
         self.factor = 0.0
 
@@ -114,7 +121,6 @@ class Displacement(Item):
 
     def __init__(self, boundary: str, value=None, component: int | None = None, field=None):
         super().__init__(boundary)
-        self._released: np.ndarray | None = None      # the support's force when a step released it
         if component not in (None, 0, 1):
             raise ItemError(f"component = {component!r}: use 0 (x), 1 (y) or None (both)")
         if value is not None and field is not None:
@@ -153,8 +159,11 @@ class Displacement(Item):
             dofs = (bs * dofs[:, None] + np.arange(bs)).ravel()
         self._dofs = np.sort(dofs[dofs // bs < n]).astype(np.int32)
         self._size = ctx.u.x.array.size
-        self._released = None              # a new model starts supported (a restart loads its state)
         return None
+
+    def reset(self) -> None:
+        super().reset()
+        self._released: np.ndarray | None = None      # the support's force once a step released it
 
     @property
     def released(self) -> bool:

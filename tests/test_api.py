@@ -173,6 +173,10 @@ def test_a_released_support_lets_the_body_go_along_the_elastic_line(tmp_path):
     assert np.all(np.abs(res["end_fx"][2:]) <= 1e-8 * F1)       # gone (Newton tolerance)
     np.testing.assert_allclose(res["clamp_fx"][2:], -(1.0 - s) * F1, atol=1e-8 * F1)
     np.testing.assert_allclose(res["tip_ux"][2:], (1.0 - s) * d, atol=1e-3 * d)
+    # the same job run again: its new model starts with the support in place
+    again = job.run()
+    assert again.newton_its == res.newton_its
+    np.testing.assert_allclose(again["end_fx"], res["end_fx"], rtol=0, atol=1e-12 * F1)
     # killed (here: a writer fails) in the middle of the release step, then restarted
     folder = tmp_path / "checkpoint"
     stopped, _ = _stretch_and_release(Checkpoint(folder, every=1, interval=0.0), stop_after=4)
