@@ -40,6 +40,11 @@ def _obstacle(obstacle, x0):
         return Plane((0.0, 0.0), (0.0, 1.0))
     if obstacle == "circle":
         return Circle((x0 + 0.5, -2.0), 2.0)
+    if obstacle == "arc":
+        # the circle's arc as 7 chords rounded by 0.05 (as a sampled Gmsh curve): the contact set
+        # spans several segments, chosen in the tree of Profile._nearest
+        th = np.pi / 2 + np.linspace(-0.4, 0.4, 8)
+        return Profile(np.c_[x0 + 0.5 + 1.95 * np.cos(th), -2.0 + 1.95 * np.sin(th)], 0.05)
     # a roof of two slopes (1 in 4) with its apex rounded to 0.2, touching the bottom edge at its
     # middle: the contact set crosses from one segment to the other over the arc
     return Profile([(x0 + 0.1, -0.3), (x0 + 0.5, -0.2), (x0 + 0.9, -0.3)], 0.2)
@@ -161,7 +166,7 @@ def test_jacobian_is_exact(meshes, case):
 # of compilation on a cold cache)
 ITEM_CASES = (
     [dict(law="j2", load=load) for load in ("point", "body", "field")]
-    + [dict(law="j2", method="penalty", theta=0, obstacle="profile")]
+    + [dict(law="j2", method="penalty", theta=0, obstacle=o) for o in ("profile", "arc")]
 )
 
 
