@@ -64,3 +64,43 @@ def test_thick_cylinder_limit_pressure(mpi_tmp, update):
     carried = res.increments[-1].load * 1.05 * p_lim
     assert 0.985 * p_lim < carried <= 1.002 * p_lim
     assert m.p_n.x.array.min() > 0.0                         # the whole wall has yielded
+
+
+@pytest.mark.parametrize("kind, law", [("plane_strain", "j2"), ("plane_strain", "chen"),
+                                       ("axisymmetric", "j2")])
+def test_compiled_return_map_equals_numpy(tmp_path, kind, law):
+    """The return map compiled into the stress evaluation and the NumPy one give the same stress,
+    plastic strain and tangent D at every point, on a history that has points on several segments
+    of the table, points unloading and points still elastic."""
+    md = geometry.rectangle(1.0, 1.0, 0.25, order=2, x0=0.5 if kind == "axisymmetric" else 0.0,
+                            comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
+    hard = Hardening((0.0, 0.01, 0.03, 0.08), (1.0, 1.3, 1.5, 1.6))
+    models = []
+    for compiled in (True, False):
+        m = Model(Body(md, kind, as_material(1000.0, 0.3, law, hard)))
+        m.finalize(compiled_return=compiled)
+        models.append(m)
+    states = []
+    for m in models:
+        out = []
+        # stretched non-uniformly, then partly back: a spread of plastic strains, some unloading
+        for b in (0.2, 0.1, 0.3):                     # no strain where x < x0 + 0.4
+            r = lambda x: np.maximum(x[0] - md.mesh.geometry.x[:, 0].min() - 0.4, 0.0)  # noqa: E731
+            m.u.interpolate(lambda x: np.vstack([b * r(x) ** 3, -b * r(x) ** 2 * x[1]]))
+            m.evaluate_stress()
+            D = m.rule.view(m.state.D).copy()
+            out.append((m.cauchy_stress().copy(), m.p.x.array.copy(), m.p_n.x.array.copy(), D))
+            m.commit()
+        states.append(out)
+    mixed = []
+    for (s1, p1, pn1, D1), (s2, p2, _, D2) in zip(*states):
+        scale = np.abs(s2).max()
+        assert s1 == pytest.approx(s2, abs=1e-12 * scale)
+        assert p1 == pytest.approx(p2, abs=1e-14)
+        assert D1 == pytest.approx(D2, abs=1e-9)
+        yielding = p2 > pn1
+        unloading = (pn1 > 0) & ~yielding        # plastic before, elastic in this increment
+        mixed.append((yielding.any(), (~yielding).any(), unloading.any()))
+    assert mixed[0][:2] == (True, True) and mixed[1] == (True, True, True)
+    p_end = states[1][-1][1]
+    assert np.unique(np.searchsorted(hard.strain, p_end[p_end > 0])).size >= 3   # several segments

@@ -62,10 +62,12 @@ def _top(x0, load):
 
 
 def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty", theta=0,
-           friction="slip", obstacle="plane", gamma0=10.0, load=None):
+           friction="slip", obstacle="plane", gamma0=10.0, load=None, compiled=None):
     """The model at the tested state, and its contact term (None without contact). ``load``: an
     extra item, "point" (a point load at a node of the right face), "body" (a body force), or
-    "field" (the top edge's motion as a displacement field)."""
+    "field" (the top edge's motion as a displacement field). ``compiled``: the return map in the
+    generated stress evaluation (True) or in NumPy (False); None as the model chooses (these
+    meshes are small: generated)."""
     x0 = 0.5 if kind == "axisymmetric" else 0.0
     material = as_material(1000.0, 0.3, law, HARDENING)
     items = [_top(x0, load), Pressure("right", 5.0), Traction("left", (2.0, -1.0))]
@@ -81,7 +83,7 @@ def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty",
                     mu=FRICTION[friction])
         items.append(c)
     m = Model(Body(meshes[x0], kind, material, update=update), items)
-    m.finalize()
+    m.finalize(compiled_return=compiled)
     solver = IncrementalSolver(m, StepSettings(n_steps=2, t_end=0.4))
     res = solver.run()
     assert res.completed, res.message
@@ -129,6 +131,9 @@ CASES = (
     + [dict(kind=k, law=law) for k in ("plane_strain", "plane_stress", "axisymmetric")
        for law in ("j2", "chen")]
     + [dict(update="hughes_winget", law=law) for law in ("j2", "chen")]
+    # the same laws' NumPy return map (the one of larger meshes)
+    + [dict(kind=k, law=law, compiled=False) for k, law in
+       (("plane_strain", "j2"), ("plane_strain", "chen"), ("axisymmetric", "j2"))]
     # contact with plasticity: penalty and Nitsche (theta = 0) with each friction state, the other
     # Nitsche variants slipping, and the circle
     + [dict(law="j2", method=meth, theta=0, friction=f) for meth in ("penalty", "nitsche")

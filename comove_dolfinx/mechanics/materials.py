@@ -79,6 +79,13 @@ class Plastic:
                if kind == PLANE_STRESS else None)
         return sig, ezz
 
+    def compiled(self, sig_tr, p_n, kind: str, elastic, table):
+        """The update at the quadrature points in UFL, to be compiled with the stress update:
+        (stress, plastic strain, D) from the trial stress (4-vector) and p_n, or None where the law
+        has no compiled form (then :meth:`update` runs in NumPy). ``table``: the loading surface's
+        segments as UFL values (return_maps_ufl.Table)."""
+        return None
+
     def _update(self, sig_rot, sig_tr, p_n, kind) -> PointUpdate:  # pragma: no cover - interface
         raise NotImplementedError
 
@@ -99,6 +106,11 @@ class J2(Plastic):
     def _update(self, sig_rot, sig_tr, p_n, kind):
         ret = rm.j2_return_points(sig_tr, p_n, self.elastic, self.surface, kind)
         return PointUpdate(ret.sig, ret.p, ret.index, ret.D)
+
+    def compiled(self, sig_tr, p_n, kind, elastic, table):
+        if kind == PLANE_STRESS:              # Simo and Taylor's iteration stays in NumPy
+            return None
+        return rm_ufl.j2_return_points(sig_tr, p_n, elastic, table)
 
     def _facet(self, sig_rot, sig_tr, p_n, kind, elastic):
         if kind == PLANE_STRESS:

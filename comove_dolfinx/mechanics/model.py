@@ -30,6 +30,7 @@ from ufl.algorithms import expand_derivatives
 from .. import compat
 from ..parallel import agree
 from .body import Body
+from . import return_maps_ufl as rm_ufl
 from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
 from .quadrature import QuadratureRule
 from .state import FacetBase, InvertedElement, QuadratureState, ReturnMapFailure
@@ -139,8 +140,16 @@ class Model:
                        self.update, self.elastic.E, self.degree, self.facet_traction,
                        lambda: FacetBase(self.state, self.u_n))
 
-    def finalize(self, jit_options: dict | None = None) -> None:
-        """Build and compile the residual, the Jacobian and the stress evaluation (once)."""
+    # the return map is compiled into the stress evaluation below this many quadrature points per
+    # rank: there NumPy's cost is its calls' overhead; above, its vectorised passes over the
+    # yielding points are faster than the generated code at every point (docs/performance.md)
+    COMPILED_RETURN_BELOW = 8000
+
+    def finalize(self, jit_options: dict | None = None, compiled_return: bool | None = None) -> None:
+        """Build and compile the residual, the Jacobian and the stress evaluation (once).
+        ``compiled_return``: the return map of a plastic body in the generated stress evaluation
+        (True) or in NumPy (False); None chooses by the number of points (COMPILED_RETURN_BELOW;
+        plane stress always NumPy)."""
         u, v, dx, st = self.u, self.v, self.rule.dx, self.state
         up = self.update.build(u, self.u_n, st.sigma_n)
         F22 = st.F22 if st.F22 is not None else up.F22
@@ -173,9 +182,18 @@ class Model:
         self.residual_ufl = R                 # (its signature names the compiled code)
         self.residual_form = compat.form(R, jit_options)
         self.jacobian_form = compat.form(Jac, jit_options)
-        # everything the constitutive stage needs, in one evaluation per iteration
+        # everything the constitutive stage needs, in one evaluation per iteration: the trial
+        # stress (and rotated old stress) for a return map in NumPy, or the return map compiled in
         parts = [to_vec(up.sigma)]
-        if self.plastic is not None:
+        if compiled_return is None:          # the same choice on every rank (each compiles it)
+            compiled_return = self.comm.allreduce(self.rule.size, op=MPI.MAX) < self.COMPILED_RETURN_BELOW
+        compiled = None if self.plastic is None or not compiled_return else self.plastic.compiled(
+            to_vec(up.sigma), st.p_n, self.kin.model, self.constants, self._surface_table())
+        if compiled is not None:
+            sig, p, D = compiled
+            parts = [sig, [p], [D[i, j] for i in range(4) for j in range(4)]]
+            st.compiled = True
+        elif self.plastic is not None:
             parts.append(to_vec(up.sigma_rot))
         if up.state_new is not None:
             parts.append(up.state_new)
@@ -183,6 +201,14 @@ class Model:
         parts.append(ufl.as_vector([ufl.det(self.update.F(u))]))
         self._eval = self.rule.expression(ufl.as_vector([c for p in parts for c in p]))
         self.set_load(0.0)
+
+    def _surface_table(self):
+        """The plastic law's loading surface (its hardening table) as a Constant: models that differ
+        in the table's values only share the compiled stress evaluation."""
+        p0, s0, h = self.plastic.surface.segments
+        c = fem.Constant(self.mesh, PETSc.ScalarType(1.0) * np.stack([p0, s0, h]))
+        n = len(p0)
+        return rm_ufl.Table(*([c[i, k] for k in range(n)] for i in range(3)))
 
     @property
     def bcs(self) -> list:

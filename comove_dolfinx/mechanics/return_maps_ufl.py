@@ -10,52 +10,74 @@ is exact (the derivative of the conditional branches is the consistent tangent).
 The functions mirror their NumPy counterparts step for step (same branches, same segment search of
 the hardening table), and the tests check them against each other. Stresses are 3x3 UFL tensors
 (index 2 out of plane, or the hoop direction in axisymmetry); in plane stress their zz entries are 0.
-``elastic`` is any object with E, nu and mu, numbers or UFL values (the model passes Constants).
+``elastic`` is any object with E, nu and mu, numbers or UFL values (the model passes Constants);
+``hardening`` is a :class:`Hardening` or a :class:`Table` of UFL values (the model's Constants, so that
+a new table of the same length does not compile new code).
+
+The radial return is also compiled into the stress evaluation at the quadrature points
+(:func:`j2_return_points`, plane strain and axisymmetry): one generated kernel gives the stress, the
+plastic strain and the derivative D = d sigma / d sigma_trial at every point, as NumPy's
+return_maps.j2_return_points does in several passes over the arrays (docs/performance.md).
 """
 from __future__ import annotations
 
+import numpy as np
 import ufl
 
-from .material_data import Hardening
+from .material_data import ONE, PDEV, Hardening
 
 # floor under squared norms whose square root is taken (its branch is never the selected one there)
 _TINY = 1e-300
 
 
+class Table:
+    """A hardening table's segments (start strains, start stresses, slopes) as sequences of UFL
+    values, read by the functions here as they read Hardening.segments."""
+
+    def __init__(self, strain, stress, slope):
+        self.segments = (list(strain), list(stress), list(slope))
+
+
+def _segment(hardening: Hardening, holds):
+    """(start strain, start stress, slope) of the first segment k with ``holds(k)`` (a UFL
+    condition), or of the last segment: the values are selected first and the arithmetic done once
+    (the generated code would otherwise evaluate every segment's formula at every point)."""
+    p0, s0, h = hardening.segments
+    a, b, c = p0[-1], s0[-1], h[-1]
+    for k in reversed(range(len(p0) - 1)):
+        cond = holds(k)
+        a, b, c = (ufl.conditional(cond, p0[k], a), ufl.conditional(cond, s0[k], b),
+                   ufl.conditional(cond, h[k], c))
+    return a, b, c
+
+
 def sigma_y(hardening: Hardening, p):
     """Yield stress at equivalent plastic strain p (piecewise linear, its tail slope beyond)."""
-    p0, s0, h = hardening.segments
-    val = s0[-1] + h[-1] * (p - p0[-1])
-    for k in reversed(range(len(p0) - 1)):
-        val = ufl.conditional(ufl.lt(p, p0[k + 1]), s0[k] + h[k] * (p - p0[k]), val)
-    return val
+    p0 = hardening.segments[0]
+    a, b, c = _segment(hardening, lambda k: ufl.lt(p, p0[k + 1]))
+    return b + c * (p - a)
 
 
 def slope(hardening: Hardening, p):
     """Slope of the segment holding p (right-continuous at the table's points)."""
-    p0, _, h = hardening.segments
-    val = h[-1]
-    for k in reversed(range(len(p0) - 1)):
-        val = ufl.conditional(ufl.lt(p, p0[k + 1]), h[k], val)
-    return val
+    p0 = hardening.segments[0]
+    return _segment(hardening, lambda k: ufl.lt(p, p0[k + 1]))[2]
 
 
 def _solve_dp(hardening: Hardening, q, pn, three_mu):
     """Root dp of q - 3 mu dp - sigma_y(p_n + dp) = 0: the first segment whose end already makes
     the residual negative holds it (as Hardening.solve_dp)."""
-    p0, s0, h = hardening.segments
+    return _solve_dp_slope(hardening, q, pn, three_mu)[0]
 
-    def on_segment(k):
-        start = ufl.max_value(pn, p0[k])
-        g = q - three_mu * (start - pn) - (s0[k] + h[k] * (start - p0[k]))
-        return start - pn + g / (three_mu + h[k])
 
-    dp = on_segment(len(p0) - 1)
-    for k in reversed(range(len(p0) - 1)):
-        p1 = p0[k + 1]
-        here = ufl.And(ufl.lt(pn, p1), ufl.lt(q - three_mu * (p1 - pn) - s0[k + 1], 0.0))
-        dp = ufl.conditional(here, on_segment(k), dp)
-    return dp
+def _solve_dp_slope(hardening: Hardening, q, pn, three_mu):
+    """(dp, the slope of the segment that holds the root), as Hardening.solve_dp."""
+    p0, s0, _ = hardening.segments
+    a, b, c = _segment(hardening, lambda k: ufl.And(
+        ufl.lt(pn, p0[k + 1]), ufl.lt(q - three_mu * (p0[k + 1] - pn) - s0[k + 1], 0.0)))
+    start = ufl.max_value(pn, a)
+    g = q - three_mu * (start - pn) - (b + c * (start - a))
+    return start - pn + g / (three_mu + c), c
 
 
 def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
@@ -65,6 +87,30 @@ def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
     three_mu = 3.0 * elastic.mu
     dp = _solve_dp(hardening, q, p_n, three_mu)
     return ufl.conditional(ufl.gt(q, sigma_y(hardening, p_n)), sig_tr - three_mu * dp / q * s, sig_tr)
+
+
+def j2_return_points(sig_tr, p_n, elastic, hardening: Hardening):
+    """The radial return of return_maps.j2_return_points in UFL, on 4-vectors (xx, yy, zz, xy):
+    (stress, plastic strain, D) with D = d sigma / d sigma_tr (4x4, the xy column counting both
+    shear entries) = 1/3 (1 x 1) + theta P_dev - c n x W n at a yielding point, theta =
+    1 - 3 mu dp / q, c = 3/2 3 mu (1 / (3 mu + H) - dp / q), the identity elsewhere
+    (docs/theory.md section 4.2). Plane strain and axisymmetry."""
+    m = (sig_tr[0] + sig_tr[1] + sig_tr[2]) / 3.0
+    s = ufl.as_vector([sig_tr[0] - m, sig_tr[1] - m, sig_tr[2] - m, sig_tr[3]])
+    q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
+    three_mu = 3.0 * elastic.mu
+    dp, h = _solve_dp_slope(hardening, q, p_n, three_mu)
+    n = s / q
+    # one switch, 1 where the point yields: each conditional of its own would evaluate the yield
+    # test again in the generated code
+    y = ufl.conditional(ufl.gt(q, sigma_y(hardening, p_n)), 1.0, 0.0)
+    theta = 1.0 - three_mu * dp / q
+    c = 1.5 * three_mu * (1.0 / (three_mu + h) - dp / q)
+    Wn = ufl.as_vector([n[0], n[1], n[2], 2.0 * n[3]])
+    Dp = ufl.as_matrix((np.outer(ONE, ONE) / 3.0).tolist()) + theta * ufl.as_matrix(PDEV.tolist()) \
+        - c * ufl.outer(n, Wn)
+    I4 = ufl.Identity(4)
+    return sig_tr - y * three_mu * dp * n, p_n + y * dp, I4 + y * (Dp - I4)
 
 
 def j2_return_plane_stress(sig_tr, p_n, elastic, hardening: Hardening, newton_steps: int = 12):

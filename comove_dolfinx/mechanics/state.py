@@ -51,13 +51,15 @@ class QuadratureState:
             self.G_tr = r.function((4,), "dezz_dtr")
             self.G_rot = r.function((4,), "dezz_drot")
         self.state_new: np.ndarray | None = None     # the update's own state, if not sigma
+        self.compiled = False     # the model's evaluation holds the return map (stress, p, D)
         self._fit_degree = max(degree - 1, 0)
         self._facet: dict = {}
 
     # -- the constitutive stage (local to the rank: no collective call) -------------------------
     def evaluate(self, vals: np.ndarray) -> None:
         """From the evaluated update (columns: trial stress, rotated old stress if plastic, the
-        update's own state if any, det F) to the stress and tangents at the points."""
+        update's own state if any, det F; or with ``compiled``: stress, p, D, ..., det F) to the
+        stress and tangents at the points."""
         detF = vals[:, -1]
         if not np.all(np.isfinite(vals)):
             raise ReturnMapFailure("the stress update returned NaN (increment too large?)")
@@ -67,6 +69,11 @@ class QuadratureState:
         sig_tr, col = vals[:, 0:4], 4
         if self.plastic is None:
             view(self.sigma)[:] = sig_tr
+        elif self.compiled:                    # the return map was evaluated with the update
+            view(self.sigma)[:] = vals[:, 0:4]
+            self.p.x.array[:] = vals[:, 4]
+            view(self.D).reshape(-1, 16)[:] = vals[:, 5:21]
+            col = 21
         else:
             sig_rot, col = vals[:, 4:8], 8
             out = self.plastic.update(sig_rot, sig_tr, self.p_n.x.array, self.kind)
