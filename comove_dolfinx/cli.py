@@ -57,7 +57,8 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
     out = pathlib.Path(out_dir)
     with RunFolder(out, overwrite, comm, restart):
         md = scene.mesh_data(comm)
-        writers = [HistoryCSV(out / "history.csv"), VTK(out, fibres=scene.fibres()),
+        # the dataset before its history row: a kill between them leaves no row without dataset
+        writers = [VTK(out, fibres=scene.fibres()), HistoryCSV(out / "history.csv"),
                    RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
                    Console(scene.name, scene.columns),
                    Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval),
@@ -99,7 +100,7 @@ def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: boo
     data = problem.read(path)
     out = pathlib.Path(out_dir)
     with RunFolder(out, overwrite, comm, restart):
-        writers = [HistoryCSV(out / "history.csv"), VTK(out),
+        writers = [VTK(out), HistoryCSV(out / "history.csv"),
                    RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem),
                    Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval), _signal_writer()]
         return problem.build(data, comm, writers).run(progress=progress,

@@ -46,7 +46,7 @@ probes = [cm.NodeDisplacement("tip", (L, 0.0)), cm.ContactLength(foundation),
           cm.ContactForce(foundation, "contact_force", component=1)]
 snaps = cm.Snapshots([0.05 * q, 0.25 * q, 0.5 * q, q])
 job = cm.Job(body, items, [cm.Step(20)], probes, load=lambda t: q * t,     # load column: q
-             writers=[cm.HistoryCSV(out / "history.csv"), cm.VTK(out), snaps])
+             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv"), snaps])
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 res = job.run(progress=True)

@@ -89,7 +89,7 @@ class PressureProfile(cm.Writer):
 
 profile = PressureProfile()
 job = cm.Job(body, items, steps, probes,
-             writers=[cm.HistoryCSV(out / "history.csv"), cm.VTK(out), profile])
+             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv"), profile])
 
 # %%
 if comm.rank == 0:
