@@ -9,8 +9,9 @@ floor: per ring size, the CPU time of one Newton iteration of the real run (the 
 ``--increments`` nominal increments, predictor, line searches, cut-backs and failed iterations
 included: run time / all iterations) against the floor on the same mesh and degree: assembling a
 linear-elastic stiffness matrix and residual (with the same lifting of the Dirichlet rows) and one
-MUMPS factorisation and solve (symbolic analysis done once, as in Newton), measured right after each
-run; the ratio is the median of the pairs' ratios. Also the run's residual evaluations per iteration
+MUMPS factorisation and solve (symbolic analysis done once, as in Newton), sampled after every
+increment of the run (its time taken out of the run's); the ratio is the median over the runs of
+the run's time per iteration over the mean of its floor samples. Also the run's residual evaluations per iteration
 and its Timer split; a cProfile listing of the largest size.
 solvers: per ring size and solver configuration (PETSc options under comove_), the CPU time of one
 factorisation and solve of the real tangent, and of the short run.
@@ -93,10 +94,11 @@ def build(name: str, size: float) -> tuple:
 
 
 def short_run(name: str, size: float, increments: int, options: dict | None = None,
-              count: bool = False) -> dict:
+              count: bool = False, between=None) -> dict:
     """The scene's first ``increments`` nominal increments (its own predictor and Newton settings,
     the linear solver's ``options``): CPU and wall time of the run (max over ranks for wall, sum
-    for CPU), iterations (failed ones included), residual evaluations, the Timer's split."""
+    for CPU), iterations (failed ones included), residual evaluations, the Timer's split.
+    ``between``: called after every converged increment, its CPU time taken out of the run's."""
     scene, model = build(name, size)
     settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}))
     steps = dataclasses.replace(scene.steps()[0].settings(), n_steps=increments,
@@ -112,10 +114,16 @@ def short_run(name: str, size: float, increments: int, options: dict | None = No
             return residual()
         newton.residual = counted
     solver = IncrementalSolver(model, steps, newton)
+    aside = [0.0]
+
+    def hook(model, inc):
+        c = _cpu()
+        between(model)
+        aside[0] += _cpu() - c
     COMM.barrier()
     w0, c0 = time.perf_counter(), _cpu()
-    res = solver.run()
-    cpu, wall = _cpu() - c0, time.perf_counter() - w0
+    res = solver.run([hook] if between else ())
+    cpu, wall = _cpu() - c0 - aside[0], time.perf_counter() - w0
     its = sum(i.newton_its + i.failed_its for i in res.increments)
     return {"dofs": model.num_dofs(), "iterations": its, "increments": len(res.increments),
             "completed_to": res.increments[-1].load if res.increments else 0.0,
@@ -124,44 +132,49 @@ def short_run(name: str, size: float, increments: int, options: dict | None = No
             "newton": newton}
 
 
-def elastic_floor(model: Model, iterations: int = 5) -> tuple[float, list[float]]:
-    """CPU seconds of one 'iteration' of linear elasticity on the model's mesh, space, quadrature
-    and supports: stiffness matrix, residual (with the lifting Newton does) and a MUMPS
-    factorisation and solve; the first (symbolic analysis) not counted, as Newton does it once.
-    Also the split (matrix, vector, factorisation + solve)."""
-    import ufl
-    from dolfinx import fem
-    u, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
-    w = fem.Function(model.V)
-    E, nu = model.elastic.E, model.elastic.nu
-    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+class ElasticFloor:
+    """One 'iteration' of linear elasticity on a model's mesh, space, quadrature and supports:
+    stiffness matrix, residual (with the lifting Newton does) and a MUMPS factorisation and solve;
+    the symbolic analysis done once at construction, as Newton does it once. ``sample()`` times
+    one, the CPU seconds of (matrix, vector, factorisation + solve) summed over the ranks."""
 
-    def sigma(d):
-        eps = ufl.sym(ufl.grad(d))
-        return lam * ufl.tr(eps) * ufl.Identity(2) + 2 * mu * eps
-    a = compat.form(ufl.inner(sigma(u), ufl.sym(ufl.grad(v))) * model.rule.dx)
-    L = compat.form(ufl.inner(sigma(w), ufl.sym(ufl.grad(v))) * model.rule.dx)
-    A, b = compat.create_matrix(a), compat.create_vector(L)
-    x = b.duplicate()
-    ksp = make_ksp(model.comm, A, {})
-    rng = np.random.default_rng(0)
-    times = []
-    for k in range(iterations + 1):
-        w.x.array[:] = 1e-3 * rng.standard_normal(w.x.array.size)
-        model.comm.barrier()
+    def __init__(self, model: Model):
+        import ufl
+        from dolfinx import fem
+        self.model = model
+        u, v = ufl.TrialFunction(model.V), ufl.TestFunction(model.V)
+        self.w = fem.Function(model.V)
+        E, nu = model.elastic.E, model.elastic.nu
+        lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+        def sigma(d):
+            eps = ufl.sym(ufl.grad(d))
+            return lam * ufl.tr(eps) * ufl.Identity(2) + 2 * mu * eps
+        self.a = compat.form(ufl.inner(sigma(u), ufl.sym(ufl.grad(v))) * model.rule.dx)
+        self.L = compat.form(ufl.inner(sigma(self.w), ufl.sym(ufl.grad(v))) * model.rule.dx)
+        self.A, self.b = compat.create_matrix(self.a), compat.create_vector(self.L)
+        self.x = self.b.duplicate()
+        self.ksp = make_ksp(model.comm, self.A, {})
+        self.rng = np.random.default_rng(0)
+        self.sample()                                   # the symbolic analysis, not counted
+
+    def sample(self) -> tuple[float, float, float]:
+        m = self.model
+        self.w.x.array[:] = 1e-3 * self.rng.standard_normal(self.w.x.array.size)
+        m.comm.barrier()
         c0 = _cpu()
-        compat.assemble_matrix(A, a, model.bcs)
+        compat.assemble_matrix(self.A, self.a, m.bcs)
         c1 = _cpu()
-        compat.assemble_vector(b, L, a, model.bcs, compat.petsc_vec(w))
+        compat.assemble_vector(self.b, self.L, self.a, m.bcs, compat.petsc_vec(self.w))
         c2 = _cpu()
         with pushed({}):
-            ksp.solve(b, x)
-        if k:
-            times.append((c1 - c0, c2 - c1, _cpu() - c2))
-    for obj in (ksp, A, b, x):
-        obj.destroy()
-    split = [model.comm.allreduce(float(t), op=MPI.SUM) for t in np.mean(times, axis=0)]
-    return sum(split), split
+            self.ksp.solve(self.b, self.x)
+        times = (c1 - c0, c2 - c1, _cpu() - c2)
+        return tuple(m.comm.allreduce(float(t), op=MPI.SUM) for t in times)
+
+    def destroy(self) -> None:
+        for obj in (self.ksp, self.A, self.b, self.x):
+            obj.destroy()
 
 
 def factor_solve(newton: Newton, options: dict, repeats: int) -> list[float]:
@@ -221,13 +234,22 @@ def _say(text: str) -> None:
 def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 4) -> list[dict]:
     rows = []
     for size in sizes:
-        # each run followed by a floor on its mesh: the ratio of each pair, so that the machine's
-        # speed drifting between runs (other virtual machines on the host: up to 2x over minutes
-        # here) does not enter the ratio
+        # each run samples the floor on its own mesh after every increment, and its ratio is taken
+        # against the mean of those samples: the floor is measured in the same minutes as the run,
+        # so the machine's speed drifting (other virtual machines on the host: up to 2x within a
+        # minute here) enters both alike
         runs, floors = [], []
         for _ in range(repeats):
-            runs.append(short_run("ring", size, increments, count=True))
-            floors.append(elastic_floor(runs[-1]["model"]))
+            samples, holder = [], {}
+
+            def sample(model):
+                if "floor" not in holder:
+                    holder["floor"] = ElasticFloor(model)
+                samples.append(holder["floor"].sample())
+            runs.append(short_run("ring", size, increments, count=True, between=sample))
+            holder["floor"].destroy()
+            split = np.mean(samples, axis=0)
+            floors.append((float(split.sum()), list(split)))
         per_it = [r["cpu"] / max(r["iterations"], 1) for r in runs]
         fl = [f[0] for f in floors]
         ratios = [a / b for a, b in zip(per_it, fl)]
