@@ -11,7 +11,9 @@ A body's material is one of
 An elastic-plastic material maps, at every quadrature point, the rotated old stress and the trial
 stress of the increment (and the plastic strain of the last converged increment) to the new stress,
 its derivatives and, in plane stress, the thickness strain of the increment with its derivatives
-(:meth:`Plastic.update`, NumPy); and the same law in UFL for facet integrals (:meth:`Plastic.facet`).
+(:meth:`Plastic.update`, NumPy); the same map in UFL to be compiled into the stress evaluation
+(:meth:`Plastic.compiled`, plane strain and axisymmetry); and the same law in UFL for facet
+integrals (:meth:`Plastic.facet`).
 Storage: 4-vectors (xx, yy, zz, xy) per point, as in return_maps.py.
 """
 from __future__ import annotations
