@@ -28,7 +28,7 @@ from mpi4py import MPI
 from tqdm import tqdm
 
 from .mechanics.model import Model
-from .names import PREDICTORS
+from .names import PREDICTORS, first_increment_error
 from .parallel import Interrupts, collective
 from .solver import (
     Increment,
@@ -52,6 +52,9 @@ class Step:
     ``predictor``: where each increment starts, "none" (the last converged state), "linear" or
     "quadratic" (extrapolation of the last converged states) or "tangent" (Euler step along the
     path's tangent, docs/theory.md section 7.2). ``max_cutbacks``: halvings of a failed increment.
+    ``first``: the step's first increment as a fraction 1, 1/2, 1/4, ... of the nominal one (at most
+    ``max_cutbacks`` halvings), doubled back to it after easy increments: a hard start (a first
+    contact and its first yield) at a size that converges instead of failed attempts at the nominal.
     ``release``: supports (``Fixed``, ``Displacement``) taken away at the start of the step: the
     force each exerted there becomes a nodal force that the step ramps down to 0 (or to the target
     ``ramp`` gives it, as a fraction of that force), so the body is let go smoothly, e.g. a clamp
@@ -64,6 +67,7 @@ class Step:
     max_cutbacks: int = 6
     name: str = ""
     release: tuple = ()
+    first: float = 1.0
 
     def __post_init__(self):
         self.release = tuple(self.release) if isinstance(self.release, (list, tuple)) else (self.release,)
@@ -75,10 +79,13 @@ class Step:
         if isinstance(self.max_cutbacks, bool) or not (isinstance(self.max_cutbacks, int) and
                                                        0 <= self.max_cutbacks <= 30):
             raise JobError(f"max_cutbacks = {self.max_cutbacks!r}: give a whole number from 0 to 30")
+        why = first_increment_error(self.first, self.max_cutbacks)
+        if why:
+            raise JobError(why)
 
     def settings(self) -> StepSettings:
         return StepSettings(n_steps=int(self.n), max_cutbacks=self.max_cutbacks,
-                            predictor=PREDICTORS[self.predictor])
+                            predictor=PREDICTORS[self.predictor], first=float(self.first))
 
     def check(self, items) -> None:
         """JobError if the step names an item that is not the job's, or releases what is not a

@@ -7,3 +7,15 @@ PLASTIC_UPDATES = ("sr", "hughes_winget")      # those that carry a rotated old 
 CONTACT_METHODS = ("penalty", "nitsche")
 PREDICTORS = {"none": False, "linear": 1, "quadratic": 2, "tangent": "tangent"}
 LAWS = ("j2", "chen")
+
+
+def first_increment_error(first, max_cutbacks: int) -> str | None:
+    """Why ``first`` (a step's first increment as a fraction of the nominal one) cannot be used, or
+    None: it must be 1, 1/2, 1/4, ... with at most ``max_cutbacks`` halvings, so that the increments
+    double back onto the nominal load levels."""
+    ok = isinstance(first, (int, float)) and not isinstance(first, bool) and \
+        any(first == 0.5 ** k for k in range(int(max_cutbacks) + 1))
+    if ok:
+        return None
+    return (f"first = {first!r}: give the first increment as 1, 0.5, 0.25, ... of the nominal one "
+            f"(at most max_cutbacks = {max_cutbacks} halvings)")

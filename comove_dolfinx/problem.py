@@ -47,6 +47,8 @@ import math
 import pathlib
 import tomllib
 
+from .names import first_increment_error
+
 
 class ProblemError(ValueError):
     """A problem file that cannot be used; the message names the key and the fix."""
@@ -187,7 +189,10 @@ def read(path) -> dict:
     steps = data.get("steps", [{}])
     for k, step in enumerate(steps, 1):
         _check(f"{path}: [[steps]] {k}", step, {"n": int, "predictor": str, "max_cutbacks": int, "ramp": dict,
-                                                "name": str, "release": list})
+                                                "name": str, "release": list, "first": float})
+        why = first_increment_error(step.get("first", 1.0), step.get("max_cutbacks", 6))
+        if why:
+            raise ProblemError(f"{path}: [[steps]] {k}: {why}")
         supports = [n for n, i in names.items() if data["items"][i - 1]["type"] in ("fixed", "displacement")]
         for key in step.get("release", []):
             if key not in supports:
@@ -253,7 +258,8 @@ def build(data: dict, comm, writers=()):
         named[name] = item
     steps = [Step(st.get("n", 10), ramp={named[k]: v for k, v in st["ramp"].items()} if "ramp" in st else None,
                   predictor=st.get("predictor", "none"), max_cutbacks=st.get("max_cutbacks", 6),
-                  name=st.get("name", ""), release=[named[k] for k in st.get("release", [])])
+                  name=st.get("name", ""), release=[named[k] for k in st.get("release", [])],
+                  first=st.get("first", 1.0))
              for st in data["steps"]]
     plist = []
     for spec in data.get("probes", []):

@@ -72,6 +72,9 @@ BAD = [
     ("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 1.0\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
      "material = {E = 1.0, nu = 0.3}\n[[items]]\ntype = 'contact'\nboundary = 'top'\n"
      "obstacle = {type = 'gmsh_profile', file = 'die.geo', curve = 'face', radius = 0.1}\n", "does not exist"),
+    ("[mesh]\nbuilder = 'rectangle'\nL = 1.0\nH = 1.0\nsize = 0.5\n[body]\nkind = 'plane_strain'\n"
+     "material = {E = 1.0, nu = 0.3}\n[[items]]\ntype = 'fixed'\nboundary = 'left'\n"
+     "[[steps]]\nfirst = 0.3\n", "first = 0.3: give the first increment as 1, 0.5, 0.25"),
     ("[mesh\n", "not valid TOML"),
 ]
 

@@ -19,6 +19,7 @@ from comove_dolfinx.presets import SceneError, get_scene
     (["lam"], ["key=value"]),
     (["n_steps=ten"], ["n_steps", "int"]),
     (["predictor=secant"], ["predictor", "secant", "tangent"]),
+    (["first=0.3"], ["first = 0.3", "0.5, 0.25"]),
 ])
 def test_bad_parameters(pairs, words):
     with pytest.raises((SceneError, MaterialError)) as err:

@@ -57,6 +57,21 @@ def test_energy_line_search_reaches_the_elastica(predictor):
     assert v == pytest.approx(ELASTICA_2, rel=5e-3)
 
 
+def test_a_smaller_first_increment_doubles_back_onto_the_nominal_levels():
+    """first = 1/4 of the nominal increment: the loop starts there, doubles after each easy increment
+    only on the grid of the doubled size, and so lands on the nominal load levels; the elastica
+    still reaches its closed form at lam = 2. A first increment that is not 1/2^k is refused."""
+    scene, model, tip = _elastica(["lam=2", "n_steps=4"])
+    model.finalize()
+    res = IncrementalSolver(model, StepSettings(n_steps=4, first=0.25, predictor=1)).run()
+    assert res.completed, res.message
+    assert [inc.load for inc in res.increments] == pytest.approx([1 / 16, 1 / 8, 1 / 4, 1 / 2, 3 / 4, 1.0])
+    assert -tip(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)
+    for bad in (0.3, 0.5 ** 7, 0.0, 2.0):
+        with pytest.raises(ValueError, match="first"):
+            IncrementalSolver(model, StepSettings(n_steps=4, first=bad))
+
+
 def test_unknown_line_search_is_refused():
     _, model, _ = _elastica(["n_steps=1"])
     model.finalize()

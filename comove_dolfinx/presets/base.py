@@ -16,7 +16,7 @@ from typing import ClassVar
 
 from ..mechanics.material_data import Elastic
 from ..names import CONTACT_METHODS as METHODS
-from ..names import PREDICTORS, UPDATES
+from ..names import PREDICTORS, UPDATES, first_increment_error
 
 # dolfinx, gmsh and the rest are imported by the methods that build: checking parameters stays light
 
@@ -40,6 +40,8 @@ class Scene:
         "order": "geometry order of the mesh (0: same as degree)",
         "n_steps": "nominal number of equal load increments",
         "max_cutbacks": "halvings of a failed increment before the run stops",
+        "first": "the first increment as a fraction 1, 0.5, 0.25, ... of the nominal one (doubled "
+                 "back after easy increments)",
         "mesh": "a Gmsh .msh file to use instead of the built-in geometry",
         "predictor": "start of each increment: none (the last converged state), linear or quadratic "
                      "(extrapolation of the last converged states), tangent (Euler step along the "
@@ -54,6 +56,7 @@ class Scene:
     order: int = 0
     n_steps: int = 20
     max_cutbacks: int = 6
+    first: float = 1.0
     mesh: str = ""
     predictor: str = "none"
 
@@ -68,6 +71,9 @@ class Scene:
             raise SceneError(f"n_steps = {self.n_steps}: give a number of increments from 1 to 1000000")
         if not 0 <= self.max_cutbacks <= 30:
             raise SceneError(f"max_cutbacks = {self.max_cutbacks}: give a number from 0 to 30")
+        why = first_increment_error(self.first, self.max_cutbacks)
+        if why:
+            raise SceneError(why)
         self.elastic()
         if self.mesh and not os.path.isfile(self.mesh):
             raise SceneError(f"mesh = {self.mesh!r}: no such file; give the path of a Gmsh .msh file")
@@ -148,7 +154,7 @@ class Scene:
     def steps(self) -> list:
         """One step: every item from 0 to 1 in n_steps nominal increments."""
         from ..job import Step
-        return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks)]
+        return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks, first=self.first)]
 
     def job(self, md, writers=()):
         """The scene as a job on the mesh ``md`` (history ``load`` = load factor x load_max)."""

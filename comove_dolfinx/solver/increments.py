@@ -33,6 +33,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from ..mechanics.model import Model
+from ..names import first_increment_error
 from ..parallel import collective
 from .newton import Newton, NewtonSettings, Timer
 
@@ -63,6 +64,10 @@ class StepSettings:
     predictor: bool | int | str = False  # where an increment starts: False the last converged state;
                                    # True or 1, 2 its linear, quadratic extrapolation (hurts thin
                                    # rotating bodies); "tangent" the Euler step along the path
+    first: float = 1.0             # the step's first increment as a fraction 1, 1/2, 1/4, ... of the
+                                   # nominal one (then doubled back after easy increments, as after a
+                                   # cut-back): a hard start (a first contact, a first yield) at a smaller
+                                   # size instead of failed attempts at the nominal one
     chord_tol: float = 0.1         # "tangent": take the last chord instead when |v - c| > chord_tol |c|
                                    # (ring: 0.01-0.05 along the crush, 0.18 and 0.75 where the
                                    # tangent carried a spurious part and the next increment failed)
@@ -102,6 +107,9 @@ class IncrementalSolver:
         self.steps = steps or StepSettings()
         if self.steps.n_steps < 1:
             raise ValueError(f"n_steps = {self.steps.n_steps}: need at least one increment")
+        why = first_increment_error(self.steps.first, self.steps.max_cutbacks)
+        if why:
+            raise ValueError(why)
         if isinstance(newton, Newton):
             self.newton, self.timer = newton, newton.timer
         else:
@@ -147,7 +155,7 @@ class IncrementalSolver:
         result = RunResult() if result is None else result
         m, st = self.model, self.steps
         dt_nom = st.t_end / st.n_steps
-        dt, t, step, cut, easy = dt_nom, 0.0, 0, 0, 0
+        dt, t, step, cut, easy = dt_nom * st.first, 0.0, 0, 0, 0
         dt_min = dt_nom / 2.0 ** st.max_cutbacks
         past = [(0.0, m.u.x.array.copy())]          # converged (load, u), newest last
         tangent = st.predictor == "tangent"

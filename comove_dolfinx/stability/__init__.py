@@ -9,7 +9,7 @@ method and Nitsche variant, plasticity law) and one per column (nominal incremen
 contact weight ``gamma0``), with the scene's cut-backs allowed unless the row says otherwise, and
 classifies each run:
 
-* ``converged``: every increment converged at its nominal size;
+* ``converged``: no increment had to be halved (a scene may start at a smaller first increment);
 * ``cutbacks``: the run reached the end, but some increments had to be halved (column ``cutbacks``);
 * ``failed``: an increment of the smallest size failed; ``load_reached`` is the load level of the last
   converged increment and ``cause`` the class of the last failure (:func:`classify`).
