@@ -247,6 +247,8 @@ def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int
                     holder["floor"] = ElasticFloor(model)
                 samples.append(holder["floor"].sample())
             runs.append(short_run("ring", size, increments, count=True, between=sample))
+            if not samples:                          # no increment converged: one after the run
+                sample(runs[-1]["model"])
             holder["floor"].destroy()
             split = np.mean(samples, axis=0)
             floors.append((float(split.sum()), list(split)))

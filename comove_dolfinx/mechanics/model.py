@@ -206,7 +206,7 @@ class Model:
         """The plastic law's loading surface (its hardening table) as a Constant: models that differ
         in the table's values only share the compiled stress evaluation."""
         p0, s0, h = self.plastic.surface.segments
-        c = fem.Constant(self.mesh, PETSc.ScalarType(1.0) * np.stack([p0, s0, h]))
+        c = fem.Constant(self.mesh, np.stack([p0, s0, h]).astype(PETSc.ScalarType))
         n = len(p0)
         return rm_ufl.Table(*([c[i, k] for k in range(n)] for i in range(3)))
 
