@@ -24,7 +24,6 @@ from __future__ import annotations
 import numpy as np
 import ufl
 
-from .kinematics import to_tensor, to_vec
 from .material_data import ONE, PDEV, Hardening
 
 # floor under squared norms whose square root is taken (its branch is never the selected one there)
@@ -65,10 +64,14 @@ def slope(hardening: Hardening, p):
     return _segment(hardening, lambda k: ufl.lt(p, p0[k + 1]))[2]
 
 
+def _solve_dp(hardening: Hardening, q, pn, three_mu):
+    """Root dp of q - 3 mu dp - sigma_y(p_n + dp) = 0: the first segment whose end already makes
+    the residual negative holds it (as Hardening.solve_dp)."""
+    return _solve_dp_slope(hardening, q, pn, three_mu)[0]
+
+
 def _solve_dp_slope(hardening: Hardening, q, pn, three_mu):
-    """(dp, the slope of the segment that holds the root) of q - 3 mu dp - sigma_y(p_n + dp) = 0:
-    the first segment whose end already makes the residual negative holds it (as
-    Hardening.solve_dp)."""
+    """(dp, the slope of the segment that holds the root), as Hardening.solve_dp."""
     p0, s0, _ = hardening.segments
     a, b, c = _segment(hardening, lambda k: ufl.And(
         ufl.lt(pn, p0[k + 1]), ufl.lt(q - three_mu * (p0[k + 1] - pn) - s0[k + 1], 0.0)))
@@ -78,10 +81,12 @@ def _solve_dp_slope(hardening: Hardening, q, pn, three_mu):
 
 
 def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
-    """Radial return of J2 plasticity with isotropic hardening (plane strain, axisymmetry) on a
-    symmetric 3x3 stress: the stress of :func:`j2_return_points` (UFL differentiates it: the
-    yield switch is constant on each side, so the derivative is the consistent tangent)."""
-    return to_tensor(j2_return_points(to_vec(sig_tr), p_n, elastic, hardening)[0])
+    """Radial return of J2 plasticity with isotropic hardening (plane strain, axisymmetry)."""
+    s = ufl.dev(sig_tr)
+    q = ufl.sqrt(ufl.max_value(1.5 * ufl.inner(s, s), _TINY))
+    three_mu = 3.0 * elastic.mu
+    dp = _solve_dp(hardening, q, p_n, three_mu)
+    return ufl.conditional(ufl.gt(q, sigma_y(hardening, p_n)), sig_tr - three_mu * dp / q * s, sig_tr)
 
 
 def j2_return_points(sig_tr, p_n, elastic, hardening: Hardening):
