@@ -185,22 +185,28 @@ def create_vector(L) -> PETSc.Vec:
 
 
 def assemble_vector(b: PETSc.Vec, L, a=None, bcs=(), x: PETSc.Vec | None = None,
-                    alpha: float = -1.0, add=None, lift: bool = True) -> None:
+                    alpha: float = -1.0, add=None, lift: bool = True,
+                    plus: PETSc.Vec | None = None) -> None:
     """Zero b and assemble the linear form L; with a bilinear form ``a``, lift the Dirichlet values
     of ``bcs`` relative to x and set the constraint rows to alpha (g - x), as Newton needs. Ghost
     contributions are summed once, after the lifting, so the owned entries are complete. ``add``:
     (owned dofs, values) added to b before the constraint rows are set (nodal forces). ``lift``
     False skips the lifting, which adds exactly nothing when x meets the constraints (g - x = 0,
-    see :func:`constraint_gap`) and costs a pass of a's kernel and the packing of its coefficients."""
+    see :func:`constraint_gap`) and costs a pass of a's kernel and the packing of its coefficients.
+    ``plus``: an assembled vector of b's layout (its ghost contributions summed) added to b's owned
+    entries before the constraint rows are set; L may then be None (nothing more to assemble)."""
     with b.localForm() as loc:
         loc.set(0.0)
-    fem_petsc.assemble_vector(b, L)
+    if L is not None:
+        fem_petsc.assemble_vector(b, L)
     if a is not None and lift:
         if _OLD:
             fem_petsc.apply_lifting(b, [a], bcs=[list(bcs)], x0=[x], scale=alpha)
         else:
             fem_petsc.apply_lifting(b, [a], bcs=[list(bcs)], x0=[x], alpha=alpha)
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    if plus is not None:
+        b.axpy(1.0, plus)
     if add is not None:
         with b.localForm() as loc:
             np.add.at(loc.array, add[0], add[1])       # (a dof may appear in two items)

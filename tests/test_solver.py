@@ -152,3 +152,35 @@ def test_force_scaled_convergence_balances_the_reaction():
     P = scene.lam * scene.E * scene.h ** 3 / 12 / scene.L ** 2
     assert abs(total) < 1e-9 * f_norm
     assert reaction == pytest.approx(P, rel=1e-5)
+
+
+def test_force_scale_comes_with_the_residual():
+    """With scale = "force" the residual is assembled as F_int plus the items' terms: the scale
+    each accepted iterate was tested against is its own ||F_int||, assembled afresh after the
+    run's every increment (to round-off), and the split residual still lands on the elastica's
+    closed form (the stol test is off, so every increment passes the residual test)."""
+    scene, model, tip = _elastica(["lam=2", "n_steps=10"])
+    model.finalize()
+    rtol = 1e-5
+
+    class Watch:
+        rnorm, accepted = None, 0
+
+        def iteration(self, newton, it, rnorm):
+            self.rnorm = rnorm
+
+        def solved(self, newton, ok, its, reason):
+            if ok:
+                used = newton.residual_scale
+                fresh = newton.force_scale()
+                assert used == pytest.approx(fresh, rel=1e-12)
+                assert self.rnorm <= rtol * fresh, (self.rnorm, fresh)
+                self.accepted += 1
+
+    watch = Watch()
+    settings = NewtonSettings(scale="force", rtol=rtol, atol=0.0, stol=0.0, monitor=watch)
+    solver = IncrementalSolver(model, StepSettings(n_steps=10), settings)
+    res = solver.run()
+    assert res.completed, res.message
+    assert watch.accepted == len(res.increments) == 10
+    assert -tip(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)

@@ -161,11 +161,13 @@ class Model:
         internal = ufl.inner(P, self.kin.grad3(v)) * w * dx
         self._internal, self._internal_form, self._jit = internal, None, jit_options
         ctx = self.context()
-        R = internal
+        R, terms = internal, None
         for item in self.items:
             term = item.attach(ctx)
             if term is not None:
                 R = R + term
+                terms = term if terms is None else terms + term
+        self._terms, self._terms_form = terms, None
         # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
         # and, in plane-stress plasticity, the thickness stretch's part
         dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
@@ -237,6 +239,15 @@ class Model:
         if self._internal_form is None:
             self._internal_form = compat.form(self._internal, self._jit)
         return self._internal_form
+
+    @property
+    def items_form(self):
+        """The items' terms of the residual alone (contact, pressure, ...: R = F_int + these, and
+        the nodal loads), compiled on first use; None when no item has a term. Assembled next to
+        :attr:`internal_force_form` it gives the residual and F_int from one pass over the cells."""
+        if self._terms_form is None and self._terms is not None:
+            self._terms_form = compat.form(self._terms, self._jit)
+        return self._terms_form
 
     def facet_traction(self, N, u=None, base: FacetBase | None = None):
         """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the

@@ -10,7 +10,8 @@ Convergence: ||R|| <= rtol * R_scale + atol, with R_scale (``scale``) either the
 residual norm of the increments so far ("initial", a force scale of the run, which depends on the
 increment size), or the norm of the internal force vector F_int = int P : Grad v at the iterate
 ("force": at equilibrium the applied loads, reactions and contact forces, so rtol bounds the
-out-of-balance force as a fraction of the forces the body carries), or a Newton correction
+out-of-balance force as a fraction of the forces the body carries; the residual is then assembled
+as F_int plus the items' terms, so that F_int comes with it), or a Newton correction
 ||du|| <= stol * ||u|| (the residual of a stiff body stalls at a round-off floor set by its
 internal forces, which can exceed rtol * R_scale when the load increments are small; only a full
 step counts). Corrections are scaled by the line searches of linesearch.py. A failure of the
@@ -139,8 +140,13 @@ class Newton(LineSearches):
         with self.timer("assembly"):
             x = compat.petsc_vec(m.u)
             lift = compat.constraint_gap(self._w, m.bcs, x) > 0.0     # else the lifting adds 0
-            compat.assemble_vector(b, m.residual_form, m.jacobian_form, m.bcs, x,
-                                   add=m.nodal_loads(), lift=lift)
+            if self.settings.scale == "force":    # F_int on its own, the items' terms added
+                compat.assemble_vector(self._f, m.internal_force_form)
+                compat.assemble_vector(b, m.items_form, m.jacobian_form, m.bcs, x,
+                                       add=m.nodal_loads(), lift=lift, plus=self._f)
+            else:
+                compat.assemble_vector(b, m.residual_form, m.jacobian_form, m.bcs, x,
+                                       add=m.nodal_loads(), lift=lift)
             b.scale(-1.0)
         return b.norm()
 
@@ -189,9 +195,8 @@ class Newton(LineSearches):
         ||F_int|| of the current iterate."""
         s = self.settings
         self._notify("iteration", it, rnorm)
-        if s.scale == "force":
-            with self.timer("force scale"):
-                self.residual_scale = self.force_scale()
+        if s.scale == "force":                  # F_int of the residual just evaluated
+            self.residual_scale = self._f.norm()
         return rnorm <= s.rtol * self.residual_scale + s.atol
 
     def solve(self) -> tuple[bool, int, str]:
