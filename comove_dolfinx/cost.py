@@ -38,7 +38,7 @@ from mpi4py import MPI
 
 from . import compat
 from .mechanics.model import Model
-from .presets import get_scene
+from .presets import SceneError, get_scene
 from .solver import IncrementalSolver, Timer
 from .solver.linear import make_ksp, pushed
 from .solver.newton import Newton
@@ -84,9 +84,9 @@ def _write_csv(path: pathlib.Path, rows: list[dict], append: bool = False) -> No
         write_table(path, rows, append=append)
 
 
-def build(name: str, size: float) -> tuple:
-    """(scene, finalized model) of a scene at a mesh size."""
-    scene = get_scene(name, [f"size={size}"])
+def build(name: str, size: float, overrides=()) -> tuple:
+    """(scene, finalized model) of a scene at a mesh size (and other parameters, "key=value")."""
+    scene = get_scene(name, [f"size={size}", *overrides])
     body, items, _ = scene.build(scene.mesh_data(COMM))
     model = Model(body, items)
     model.finalize()
@@ -94,12 +94,13 @@ def build(name: str, size: float) -> tuple:
 
 
 def short_run(name: str, size: float, increments: int, options: dict | None = None,
-              count: bool = False, between=None) -> dict:
+              count: bool = False, between=None, overrides=()) -> dict:
     """The scene's first ``increments`` nominal increments (its own predictor and Newton settings,
     the linear solver's ``options``): CPU and wall time of the run (max over ranks for wall, sum
     for CPU), iterations (failed ones included), residual evaluations, the Timer's split.
-    ``between``: called after every converged increment, its CPU time taken out of the run's."""
-    scene, model = build(name, size)
+    ``between``: called after every converged increment, its CPU time taken out of the run's.
+    ``overrides``: scene parameters, "key=value" (the predictor, ...)."""
+    scene, model = build(name, size, overrides)
     settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}))
     steps = dataclasses.replace(scene.steps()[0].settings(), n_steps=increments,
                                 t_end=increments / scene.n_steps)
@@ -231,7 +232,8 @@ def _say(text: str) -> None:
 # ------------------------------------------------------------------------------------------------
 # the studies
 # ------------------------------------------------------------------------------------------------
-def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 4) -> list[dict]:
+def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 4,
+          overrides=()) -> list[dict]:
     rows = []
     for size in sizes:
         # each run samples the floor on its own mesh after every increment, and its ratio is taken
@@ -246,7 +248,8 @@ def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int
                 if "floor" not in holder:
                     holder["floor"] = ElasticFloor(model)
                 samples.append(holder["floor"].sample())
-            runs.append(short_run("ring", size, increments, count=True, between=sample))
+            runs.append(short_run("ring", size, increments, count=True, between=sample,
+                                  overrides=overrides))
             if not samples:                          # no increment converged: one after the run
                 sample(runs[-1]["model"])
             holder["floor"].destroy()
@@ -278,7 +281,7 @@ def floor(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int
     _write_csv(out / "floor.csv", rows)
     floor_chart(out / "floor.png", rows)
     if sizes:
-        _profile(out, sizes[-1], increments)
+        _profile(out, sizes[-1], increments, overrides)
     return rows
 
 
@@ -320,11 +323,11 @@ def floor_chart(path: pathlib.Path, rows: list[dict], goal: float = 1.3) -> None
     plt.close(fig)
 
 
-def _profile(out: pathlib.Path, size: float, increments: int) -> None:
+def _profile(out: pathlib.Path, size: float, increments: int, overrides=()) -> None:
     """cProfile of the short ring run at one size, the 30 costliest functions (own time)."""
     prof = cProfile.Profile()
     prof.enable()
-    short_run("ring", size, increments)
+    short_run("ring", size, increments, overrides=overrides)
     prof.disable()
     if COMM.rank == 0:
         text = io.StringIO()
@@ -418,7 +421,15 @@ def main(argv=None) -> None:
     p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers)")
     p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
     p.add_argument("--scenes", default="ring,plate", help="comma-separated scenes (scale)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="overrides",
+                   help="a parameter of the ring scene for its runs (floor), e.g. predictor=linear")
     a = p.parse_args(argv)
+    if a.overrides and a.study != "floor":
+        p.error("--set applies to the floor study only")
+    try:
+        get_scene("ring", a.overrides)
+    except SceneError as err:
+        p.error(str(err))
     logging.disable(logging.INFO)
     out = pathlib.Path(a.out)
     if COMM.rank == 0:
@@ -430,7 +441,7 @@ def main(argv=None) -> None:
     if a.sizes and a.study != "scale":
         kw["sizes"] = tuple(float(s) for s in a.sizes.split(","))
     if a.study == "floor":
-        floor(out, **kw)
+        floor(out, overrides=tuple(a.overrides), **kw)
     elif a.study == "solvers":
         solvers(out, names=a.solvers.split(",") if a.solvers else None, **kw)
     else:

@@ -20,3 +20,18 @@ def test_floor_study_writes_a_consistent_table(tmp_path):
     assert float(row["residuals_per_it"]) >= 1.0
     timed = sum(float(row[f"{k}_s_per_it"]) for k in ("solve", "jacobian", "assembly", "stress_update"))
     assert 0.0 < timed <= float(row["iteration_cpu_s"]) * 1.05 and np.isfinite(float(row["ratio"]))
+
+
+def test_scene_parameters_reach_the_runs_and_bad_ones_are_refused(capsys):
+    """`--set` changes the ring's runs: with the tangent predictor (the scene's) the Timer books
+    the predictor's residuals and back-substitution, with the linear extrapolation nothing; a value
+    the scene does not know is a one-line usage error, before any run."""
+    def predictor_time(predictor):
+        run = cost.short_run("ring", 0.22, 3, overrides=[f"predictor={predictor}"])
+        assert run["increments"] >= 3
+        return run["timer"].get("predictor", 0.0)
+    assert predictor_time("tangent") > 0.0 and predictor_time("linear") == 0.0
+    with pytest.raises(SystemExit):
+        cost.main(["floor", "--set", "predictor=bogus", "--sizes", "0.22"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "predictor = 'bogus'" in err[-1] and "tangent" in err[-1]
