@@ -2,9 +2,11 @@
 results.pvd, warps the last increment by its displacement and colours it by a cell field: the
 warped body's bounds are the deformed elastica's (the tip where the history puts it) and the
 colour range is the field's range in the last .vtu."""
+import os
 import pathlib
 import shutil
 import subprocess
+import time
 
 import launch
 import numpy as np
@@ -25,8 +27,18 @@ def test_paraview_warps_and_colours_the_last_increment(tmp_path):
                     "--set", "n_steps=3", "--set", "size=0.25"])
     assert p.returncode == 0, p.stderr
     png = tmp_path / "elastica.png"
-    r = subprocess.run(["xvfb-run", "-a", "pvbatch", str(HERE / "paraview_check.py"), str(out / "results.pvd"),
-                        str(png), "von_mises_cell_avg"], capture_output=True, text=True, timeout=300)
+    # On a loaded machine pvbatch's XOpenDisplay now and then fails against a running Xvfb ("bad X
+    # server connection", measured: 3 of 8 runs with three busy processes on two cores, also with
+    # a server started by hand): that is the display, not ParaView or the results, so the render
+    # is tried again, after a pause, on a display of its own
+    for attempt in range(4):
+        time.sleep(2.0 * attempt)
+        display = str(100 + (os.getpid() * 7 + 101 * attempt) % 800)
+        r = subprocess.run(["xvfb-run", "-a", "-n", display, "pvbatch", str(HERE / "paraview_check.py"),
+                            str(out / "results.pvd"), str(png), "von_mises_cell_avg"],
+                           capture_output=True, text=True, timeout=300)
+        if "bad X server connection" not in r.stdout + r.stderr:
+            break
     line = [x for x in r.stdout.splitlines() if x.startswith("PARAVIEW")]
     assert r.returncode == 0 and line, r.stdout + r.stderr
     n, x0, x1, y0, y1, lo, hi = (float(v) for v in line[0].split()[1:])
