@@ -28,9 +28,9 @@ def test_paraview_warps_and_colours_the_last_increment(tmp_path):
     assert p.returncode == 0, p.stderr
     png = tmp_path / "elastica.png"
     # On a loaded machine pvbatch's XOpenDisplay now and then fails against a running Xvfb ("bad X
-    # server connection", measured: 3 of 8 runs with three busy processes on two cores, also with
-    # a server started by hand): that is the display, not ParaView or the results, so the render
-    # is tried again, after a pause, on a display of its own
+    # server connection": 3 of 8 runs against an Xvfb started by hand, with three busy processes on
+    # two cores; under xvfb-run too): that is the display, not ParaView or the results, so the
+    # render is tried again, after a pause, on a display of its own
     for attempt in range(4):
         time.sleep(2.0 * attempt)
         display = str(100 + (os.getpid() * 7 + 101 * attempt) % 800)
