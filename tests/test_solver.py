@@ -184,3 +184,43 @@ def test_force_scale_comes_with_the_residual():
     assert res.completed, res.message
     assert watch.accepted == len(res.increments) == 10
     assert -tip(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)
+
+
+@pytest.mark.mpi
+def test_load_terms_carry_the_residuals_dependence_on_the_load(mpi_tmp):
+    """The tangent predictor's dR/dt comes from the load terms alone (F_int depends on u, not on the
+    load factor): at a converged elastic-plastic state of a strip loaded by every kind of term that
+    moves with t - a prescribed displacement (its lifting and constraint rows), a follower pressure
+    (a facet form) and a point load (a nodal force) - the difference of Newton.load_terms between two
+    load factors equals that of the whole residual to round-off, on one rank and on two."""
+    from comove_dolfinx import geometry
+    from comove_dolfinx.loads import Displacement, Fixed, PointLoad, Pressure
+    from comove_dolfinx.mechanics.body import Body
+    from comove_dolfinx.mechanics.materials import J2, Hardening
+
+    L, H = 1.0, 0.2
+    md = geometry.rectangle(L, H, H / 4, order=2, comm=MPI.COMM_WORLD, cache_dir=str(mpi_tmp))
+    model = Model(Body(md, "plane_strain", J2(1e4, 0.3, Hardening.perfect(1.0))),
+                  [Fixed("left", component=0), Fixed("bottom", component=1),
+                   Displacement("right", value=3e-4, component=0), Pressure("top", 0.02),
+                   PointLoad((L, H), (0.0, -0.002))])
+    model.finalize()
+    solver = IncrementalSolver(model, StepSettings(n_steps=2), NewtonSettings())
+    assert solver.run().completed
+    assert model.comm.allreduce(float(model.p.x.array.max(initial=0.0)), op=MPI.MAX) > 0.0
+    newton, t, h = solver.newton, model.load, 0.25
+
+    def difference(assemble):
+        out = []
+        for s in (t + h, t):
+            model.set_load(s)
+            assemble()
+            out.append(newton.b.copy())
+        out[0].axpy(-1.0, out[1])
+        return out[0]
+    whole = difference(newton.residual)
+    terms = difference(lambda: newton.load_terms(newton.b))
+    f_int = newton.force_scale()
+    terms.axpy(-1.0, whole)
+    assert whole.norm() > 1e-3 * f_int                   # the load terms do move
+    assert terms.norm() <= 1e-12 * f_int

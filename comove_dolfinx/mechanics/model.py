@@ -305,7 +305,7 @@ class Model:
     def evaluate_stress(self) -> None:
         """Stress (and tangent) at every quadrature point for the current displacement iterate; nothing
         to do when the state already holds this iterate's (the same u, converged state and elastic
-        constants: e.g. the predictor's residuals at two load factors, which differ in the items' terms).
+        constants: e.g. Newton's first residual after a friction re-lag pass, at the iterate just solved).
         The converged state changes through :meth:`commit` and :meth:`load_state` only.
 
         Raises, on every rank when it happens on any: :class:`InvertedElement` if det F <= 0 at a
