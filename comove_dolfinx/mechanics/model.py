@@ -314,7 +314,7 @@ class Model:
         key = (self._generation, float(self.constants.E.value), float(self.constants.nu.value))
         same = self._evaluated is not None and self._evaluated[0] == key and \
             np.array_equal(self._evaluated[1], self.u.x.array)
-        if self.comm.allreduce(same, op=MPI.LAND):
+        if same if self.comm.size == 1 else self.comm.allreduce(same, op=MPI.LAND):
             return                             # this iterate, from the same converged state
         err = None
         try:
