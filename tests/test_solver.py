@@ -15,6 +15,7 @@ from comove_dolfinx.solver import (
     StepSettings,
     _extrapolate,
 )
+from comove_dolfinx.solver.increments import _path_rate
 
 # lam = 2 of the inextensible elastica (docs/theory.md section 8.1): v/L
 ELASTICA_2 = 0.49346
@@ -110,9 +111,26 @@ def test_tangent_predictor_is_the_derivative_of_the_path():
     assert err[0.05] / err[0.1] == pytest.approx(0.5, abs=0.1)
 
 
+def test_path_rate_is_the_slope_of_the_interpolant():
+    """The reference rate of the tangent's check is the slope at the newest state of the polynomial
+    through the converged states: exact for linear paths through two states and for quadratic paths
+    through three (unequal steps), and the chord's error on a quadratic path is (t2 - t1) |c2|."""
+    a, b, c = np.array([1.0, -2.0]), np.array([0.5, 3.0]), np.array([-4.0, 0.25])
+    path = lambda t: a + b * t + c * t ** 2           # noqa: E731
+    slope = lambda t: b + 2 * c * t                   # noqa: E731
+    ts = [0.1, 0.25, 0.3]
+    assert np.allclose(_path_rate([(t, path(t)) for t in ts], 0.3), slope(0.3))
+    assert np.allclose(_path_rate([(t, a + b * t) for t in ts[1:]], 0.3), b)
+    chord = _path_rate([(t, path(t)) for t in ts[1:]], 0.3)
+    assert np.allclose(slope(0.3) - chord, c * (0.3 - 0.25))
+
+
 def test_tangent_predictor_falls_back_to_the_chord():
-    """A tangent that strays from the last chord by more than chord_tol (a spurious part along a
-    near-mechanism) is not used: the check accepts 5 % and refuses 20 % with chord_tol = 0.1."""
+    """A tangent that strays from the rate of the last converged states by more than chord_tol (a
+    spurious part along a near-mechanism) is not used: against the chord of two states the check
+    accepts 5 % and refuses 20 % with chord_tol = 0.1. With three states on a path that curves (as
+    the elastica's does), the exact tangent differs from the chord by more than that, and is
+    accepted; the same tangent with a spurious part of 20 % of the chord at one node is refused."""
     _, model, _ = _elastica(["n_steps=1"])
     model.finalize()
     solver = IncrementalSolver(model, StepSettings(predictor="tangent", chord_tol=0.1))
@@ -123,7 +141,16 @@ def test_tangent_predictor_falls_back_to_the_chord():
     rate = fem.Function(model.V)
     for factor, ok in ((1.05, True), (1.2, False), (0.8, False)):
         rate.x.array[:] = factor * chord
-        assert solver._agrees_with_chord(rate, past) is ok
+        assert solver._agrees_with_path(rate, past) is ok
+    b, c = u1, 2.0 * rng.standard_normal(u1.size)                   # u(t) = b t + c t^2
+    ts = (0.2, 0.4, 0.6)
+    past = [(t, b * t + c * t * t) for t in ts]
+    chord = (past[2][1] - past[1][1]) / 0.2
+    rate.x.array[:] = b + 2 * c * ts[2]
+    assert np.linalg.norm(rate.x.array - chord) > 0.1 * np.linalg.norm(chord)   # the chord's test fails
+    assert solver._agrees_with_path(rate, past)
+    rate.x.array[:2] += 0.2 * np.linalg.norm(chord)                  # one node, both components
+    assert not solver._agrees_with_path(rate, past)
 
 
 @pytest.mark.mpi

@@ -50,7 +50,7 @@ class Elastica(Scene):
     h: float = 0.25
     lam: float = 5.0
     n_steps: int = 10
-    predictor: str = "tangent"     # 5.5 Newton iterations per increment, 6.8 from the last state
+    predictor: str = "tangent"     # 4.8 Newton iterations per increment, 6.8 from the last state
 
     def validate(self):
         super().validate()

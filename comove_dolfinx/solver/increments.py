@@ -52,6 +52,24 @@ def _extrapolate(points, t: float) -> np.ndarray:
     return out
 
 
+def _path_rate(points, t: float) -> np.ndarray:
+    """du/dt at load t of the Lagrange polynomial through the converged states ``points`` =
+    [(t_i, u_i)]: the chord through two states, the quadratic's slope (second order) through three."""
+    out = np.zeros_like(points[0][1])
+    for i, (ti, ui) in enumerate(points):
+        dw = 0.0                              # d/dt of prod_{j != i} (t - t_j) / (t_i - t_j)
+        for k, (tk, _) in enumerate(points):
+            if k == i:
+                continue
+            w = 1.0 / (ti - tk)
+            for j, (tj, _) in enumerate(points):
+                if j not in (i, k):
+                    w *= (t - tj) / (ti - tj)
+            dw += w
+        out += dw * ui
+    return out
+
+
 @dataclass
 class StepSettings:
     """Increment control: nominal number of equal increments over the load range, cut-back, growth."""
@@ -68,9 +86,10 @@ class StepSettings:
                                    # nominal one (then doubled back after easy increments, as after a
                                    # cut-back): a hard start (a first contact, a first yield) at a smaller
                                    # size instead of failed attempts at the nominal one
-    chord_tol: float = 0.1         # "tangent": take the last chord instead when |v - c| > chord_tol |c|
-                                   # (ring: 0.01-0.05 along the crush, 0.18 and 0.75 where the
-                                   # tangent carried a spurious part and the next increment failed)
+    chord_tol: float = 0.1         # "tangent": take the last chord c instead when |v - r| > chord_tol |c|,
+                                   # r the rate of the quadratic through the last three converged
+                                   # states (the chord while there are two): ring 0.003-0.02 along
+                                   # the crush, 0.75 to 2.8 where the tangent carried a spurious part
 
 
 @dataclass
@@ -118,16 +137,20 @@ class IncrementalSolver:
         self.relaggers = [item for item in model.items if hasattr(item, "relag_pass")]
         self.max_passes = max([item.max_passes for item in self.relaggers] + [1])
 
-    def _agrees_with_chord(self, rate: fem.Function, past) -> bool:
+    def _agrees_with_path(self, rate: fem.Function, past) -> bool:
         """Whether the path's tangent ``rate`` at the newest state lies within ``chord_tol`` of the
-        chord of the last increment, |v - c| <= chord_tol |c|. Near a mechanism (a ring of plastic
-        hinges) the tangent is almost singular and its solution can carry a spurious part along it;
-        the predictor then takes the chord (linear extrapolation) instead."""
+        rate that the last converged states give, |v - r| <= chord_tol |c|: r the slope of the
+        quadratic through the last three (second-order accurate on a smooth path, so a path that
+        curves, as the elastica's does, is not taken for a spurious mode) or the chord c of the
+        last increment while there are two. Near a mechanism (a ring of plastic hinges) the tangent
+        is almost singular and its solution can carry a spurious part along it; the predictor then
+        takes the chord (linear extrapolation) instead."""
         (t0, u0), (t1, u1) = past[-2:]
         chord = (u1 - u0) / (t1 - t0)
+        ref = _path_rate(past[-3:], t1) if len(past) > 2 else chord
         imap = self.model.V.dofmap.index_map
         n = imap.size_local * self.model.V.dofmap.index_map_bs
-        local = np.array([np.sum((rate.x.array[:n] - chord[:n]) ** 2), np.sum(chord[:n] ** 2)])
+        local = np.array([np.sum((rate.x.array[:n] - ref[:n]) ** 2), np.sum(chord[:n] ** 2)])
         diff2, chord2 = self.model.comm.allreduce(local, op=MPI.SUM)
         return bool(diff2 <= self.steps.chord_tol ** 2 * chord2)
 
@@ -161,8 +184,10 @@ class IncrementalSolver:
         tangent = st.predictor == "tangent"
         if isinstance(st.predictor, str) and not tangent:
             raise ValueError(f"predictor = {st.predictor!r}: choose 0, 1, 2 or tangent")
-        # the tangent keeps the last two states: its fallback is the linear extrapolation (the chord)
+        # the tangent's fallback is the linear extrapolation (the chord); it keeps the last three
+        # states, which its check compares it with (_agrees_with_path)
         order = 1 if tangent else int(st.predictor)
+        keep = 2 if tangent else order
         rate, have_rate = fem.Function(m.V) if tangent else None, False
         if tangent and self.newton.factorised:
             # a later step of a job: the path's tangent at the state where the last step ended
@@ -175,7 +200,7 @@ class IncrementalSolver:
             from_start = have_rate = False
             if tangent and self.newton.factorised:
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
-                             and self._agrees_with_chord(rate, past))
+                             and self._agrees_with_path(rate, past))
         t_mark, failed_its = time.perf_counter(), 0
         tol = 1e-12 * st.t_end
         while t < st.t_end - tol:
@@ -217,7 +242,7 @@ class IncrementalSolver:
             result.increments.append(inc)
             cut, failed_its = 0, 0
             # where the loop goes on from (computed before the consumer sees the increment)
-            past_next = past[-order:] + [(t, m.u.x.array.copy())] if order else past
+            past_next = past[-keep:] + [(t, m.u.x.array.copy())] if order else past
             easy_next, dt_next = easy + 1 if its <= st.easy_its else 0, dt
             # grow back towards the nominal increment, staying on the grid of the doubled step
             if easy_next >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
@@ -230,7 +255,7 @@ class IncrementalSolver:
             if tangent:
                 from_start = False
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
-                             and self._agrees_with_chord(rate, past))
+                             and self._agrees_with_path(rate, past))
             t_mark = time.perf_counter()
             easy, dt = easy_next, dt_next
         result.completed = True
