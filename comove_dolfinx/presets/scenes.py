@@ -238,10 +238,13 @@ class Ring(ContactScene):
     # of the last converged states 5.6 (same increments, same P); from the last converged state
     # alone 211 increments at 11.4 (its elastic tangent overshoots into the hinges' mechanism).
     predictor: str = "tangent"
-    # The first increment is half the nominal: at the nominal size the crown's point contact and its
-    # immediate yield fail after 16-17 Newton iterations (1.4k and 5k dofs) and the loop halves it
-    # anyway; starting there gives the same history to its last digit without the failed attempt.
-    first: float = 0.5
+    # The first increment is an eighth of the nominal: the crown's point contact yields at once, and
+    # Newton's corrections there overshoot into elastic unloading (the energy search cuts them to a
+    # tenth). At half the nominal the first attempt still failed at 5k, 18k and 45k dofs (10-13
+    # iterations) and took 18 iterations with 64 residual evaluations at 1.4k; from an eighth no
+    # attempt fails at any of those sizes, and the whole crush takes 156 instead of 163 iterations,
+    # 223 instead of 267 residuals at 1.4k (docs/performance.md, 2026-11-27 morning).
+    first: float = 0.125
 
     def validate(self):
         super().validate()
