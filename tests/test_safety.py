@@ -161,12 +161,18 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n, n_restart):
     uninterrupted run on the restart's ranks: the same increments and Newton iterations, every
     column to 1e-12 of its largest value in serial (1e-6 on two ranks, where the parallel direct
     solver's round-off differs from run to run)."""
+    import tempfile
+
     import numpy as np
     out = tmp_path / "run"
+    # The killed launcher cannot remove its session directory (Open MPI's, under TMPDIR, named by its
+    # pid), and a later mpirun that gets the same pid refuses to start (PRRTE: PMIX_ERR_EXISTS). So
+    # the killed run gets a TMPDIR of its own, removed below; short, as it holds PMIx's sockets.
+    mpi_tmp = tempfile.mkdtemp(prefix="comove-")
     p = subprocess.Popen(launch.command([*RUN, "ring", "--out", out, "--no-progress",
                                          "--checkpoint-interval", "0"], n=n),
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=launch.ENV,
-                         start_new_session=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=dict(launch.ENV, TMPDIR=mpi_tmp), start_new_session=True)
     _wait_rows(p, out / "history.csv", 12)
     # the launcher and every rank (Open MPI puts ranks in sessions of their own), as a crash would
     os.killpg(p.pid, signal.SIGKILL)
@@ -176,6 +182,7 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n, n_restart):
         if subprocess.run(["pgrep", "-f", str(out)], capture_output=True).returncode != 0:
             break
         time.sleep(0.05)
+    shutil.rmtree(mpi_tmp, ignore_errors=True)
     meta = json.loads((out / "checkpoint" / "meta.json").read_text())
     assert 10 <= meta["increment"] < 39          # the kill may land between the history and the checkpoint
     r = launch.run([*RUN, "ring", "--out", out, "--no-progress", "--restart"], n=n_restart)
