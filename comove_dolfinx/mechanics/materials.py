@@ -38,8 +38,9 @@ class PointUpdate:
     sig: np.ndarray                 # (N, 4) stress at the end of the increment
     p: np.ndarray                   # (N,) equivalent plastic strain
     index: np.ndarray               # (k,) the points that yield
-    D: np.ndarray                   # (k, 4, 4) d sig / d sig_tr at those points (sig depends on sig_rot
-                                    # through sig_tr only); elsewhere return_maps.elastic_tangent(kind)
+    D: np.ndarray | None            # (k, 4, 4) d sig / d sig_tr at those points (sig depends on sig_rot
+                                    # through sig_tr only); elsewhere return_maps.elastic_tangent(kind);
+                                    # None when the update was asked for no tangent
     ezz: np.ndarray | None = None   # plane stress: log thickness strain of the increment
     dezz_tr: np.ndarray | None = None    # (N, 4) its derivative by sig_tr
     dezz_rot: np.ndarray | None = None   # (N, 4) its derivative by sig_rot
@@ -64,9 +65,12 @@ class Plastic:
             raise MaterialError(f"hardening = {self.hardening!r}: give a Hardening (Hardening.table, "
                                 "Hardening.linear or Hardening.perfect)")
 
-    def update(self, sig_rot: np.ndarray, sig_tr: np.ndarray, p_n: np.ndarray, kind: str) -> PointUpdate:
-        """The increment at N points: rotated old stress, trial stress, plastic strain at its start."""
-        out = self._update(sig_rot, sig_tr, p_n, kind)
+    def update(self, sig_rot: np.ndarray, sig_tr: np.ndarray, p_n: np.ndarray, kind: str,
+               tangent: bool = True) -> PointUpdate:
+        """The increment at N points: rotated old stress, trial stress, plastic strain at its start.
+        ``tangent`` False: D is not computed where the law can leave it out (its ``D`` is then
+        None; the Jacobian takes D x from :meth:`tangent_times`)."""
+        out = self._update(sig_rot, sig_tr, p_n, kind, tangent or kind == PLANE_STRESS)
         if kind == PLANE_STRESS:
             out.ezz, out.dezz_tr, out.dezz_rot = rm.plane_stress_thickness(
                 out.sig, sig_tr, sig_rot, out.index, out.D, self.elastic)
@@ -83,12 +87,19 @@ class Plastic:
 
     def compiled(self, sig_tr, p_n, kind: str, elastic, table):
         """The update at the quadrature points in UFL, to be compiled with the stress update:
-        (stress, plastic strain, D) from the trial stress (4-vector) and p_n, or None where the law
+        (stress, plastic strain) from the trial stress (4-vector) and p_n, or None where the law
         has no compiled form (then :meth:`update` runs in NumPy). ``table``: the loading surface's
         segments as UFL values (return_maps_ufl.Table)."""
         return None
 
-    def _update(self, sig_rot, sig_tr, p_n, kind) -> PointUpdate:  # pragma: no cover - interface
+    def tangent_times(self, sig, p, p_n, x, kind: str, elastic, table):
+        """D x in UFL, D = d sigma / d sigma_tr of the update, from the state it stored at the points
+        (stress sig, plastic strain p, p_n of the converged increment: quadrature functions), for
+        the Jacobian; None where D must be stored by each evaluation instead (:meth:`update` with
+        ``tangent``)."""
+        return None
+
+    def _update(self, sig_rot, sig_tr, p_n, kind, tangent) -> PointUpdate:  # pragma: no cover - interface
         raise NotImplementedError
 
     def _facet(self, sig_rot, sig_tr, p_n, kind, elastic):  # pragma: no cover - interface
@@ -105,14 +116,19 @@ class J2(Plastic):
         """The loading surface sigma_eq = Y(p) that the return map holds the stress on."""
         return self.hardening
 
-    def _update(self, sig_rot, sig_tr, p_n, kind):
-        ret = rm.j2_return_points(sig_tr, p_n, self.elastic, self.surface, kind)
+    def _update(self, sig_rot, sig_tr, p_n, kind, tangent):
+        ret = rm.j2_return_points(sig_tr, p_n, self.elastic, self.surface, kind, tangent=tangent)
         return PointUpdate(ret.sig, ret.p, ret.index, ret.D)
 
     def compiled(self, sig_tr, p_n, kind, elastic, table):
         if kind == PLANE_STRESS:              # Simo and Taylor's iteration stays in NumPy
             return None
         return rm_ufl.j2_return_points(sig_tr, p_n, elastic, table)
+
+    def tangent_times(self, sig, p, p_n, x, kind, elastic, table):
+        if kind == PLANE_STRESS:              # its D comes from Simo and Taylor's iteration
+            return None
+        return rm_ufl.j2_tangent_times(sig, p, p_n, x, elastic, table)
 
     def _facet(self, sig_rot, sig_tr, p_n, kind, elastic):
         if kind == PLANE_STRESS:

@@ -9,7 +9,9 @@ elastic-plastic materials, the return map at the quadrature points (materials.py
 w = 2 pi r (axisymmetry) or the thickness b. The Jacobian is exact: the geometric part comes from UFL
 differentiation of P at fixed sigma, the material part from UFL differentiation of the trial stress,
 mapped by the return map's derivative D = d sigma / d sigma_trial (identity for elastic materials,
-where UFL differentiates the update directly), and in plane-stress plasticity the part of the
+where UFL differentiates the update directly; applied from the stored stress and plastic strain in
+plane strain and axisymmetry, stored by each evaluation in plane stress), and in plane-stress
+plasticity the part of the
 thickness stretch, dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot). A Taylor test checks it
 (taylor.py, tests/test_taylor.py).
 
@@ -140,16 +142,13 @@ class Model:
                        self.update, self.elastic.E, self.degree, self.facet_traction,
                        lambda: FacetBase(self.state, self.u_n))
 
-    # the return map is compiled into the stress evaluation below this many quadrature points per
-    # rank: there NumPy's cost is its calls' overhead; above, its vectorised passes over the
-    # yielding points are faster than the generated code at every point (docs/performance.md)
-    COMPILED_RETURN_BELOW = 8000
-
-    def finalize(self, jit_options: dict | None = None, compiled_return: bool | None = None) -> None:
+    def finalize(self, jit_options: dict | None = None, compiled_return: bool = True) -> None:
         """Build and compile the residual, the Jacobian and the stress evaluation (once).
         ``compiled_return``: the return map of a plastic body in the generated stress evaluation
-        (True) or in NumPy (False); None chooses by the number of points (COMPILED_RETURN_BELOW;
-        plane stress always NumPy)."""
+        (True, where the law has a compiled form: plane strain and axisymmetry) or in NumPy (False;
+        plane stress always). Compiled, one pass over the points gives the stress and the plastic
+        strain, and it is the faster at every size since the Jacobian applies D from the stored
+        state (docs/performance.md)."""
         u, v, dx, st = self.u, self.v, self.rule.dx, self.state
         up = self.update.build(u, self.u_n, st.sigma_n)
         F22 = st.F22 if st.F22 is not None else up.F22
@@ -172,9 +171,15 @@ class Model:
         # and, in plane-stress plasticity, the thickness stretch's part
         dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
         dsig = to_tensor(dsig_tr)
+        table = self._surface_table() if self.plastic is not None else None
         if self.plastic is not None:
             dsig_rot = to_vec(ufl.derivative(up.sigma_rot, u, self.u_trial))
-            dsig = to_tensor(ufl.dot(st.D, dsig_tr))
+            Dx = self.plastic.tangent_times(st.sigma, st.p, st.p_n, dsig_tr, self.kin.model,
+                                            self.constants, table)
+            if Dx is None:                     # D stored by the evaluations
+                st.store_tangent()
+                Dx = ufl.dot(st.D, dsig_tr)
+            dsig = to_tensor(Dx)
         Jac = ufl.derivative(R, u, self.u_trial) + \
             ufl.inner(J * dsig * ufl.inv(F).T, self.kin.grad3(v)) * w * dx
         if st.F22 is not None:
@@ -184,16 +189,14 @@ class Model:
         self.residual_ufl = R                 # (its signature names the compiled code)
         self.residual_form = compat.form(R, jit_options)
         self.jacobian_form = compat.form(Jac, jit_options)
-        # everything the constitutive stage needs, in one evaluation per iteration: the trial
+        # everything the constitutive stage needs, in one evaluation per iterate: the trial
         # stress (and rotated old stress) for a return map in NumPy, or the return map compiled in
         parts = [to_vec(up.sigma)]
-        if compiled_return is None:          # the same choice on every rank (each compiles it)
-            compiled_return = self.comm.allreduce(self.rule.size, op=MPI.MAX) < self.COMPILED_RETURN_BELOW
         compiled = None if self.plastic is None or not compiled_return else self.plastic.compiled(
-            to_vec(up.sigma), st.p_n, self.kin.model, self.constants, self._surface_table())
+            to_vec(up.sigma), st.p_n, self.kin.model, self.constants, table)
         if compiled is not None:
-            sig, p, D = compiled
-            parts = [sig, [p], [D[i, j] for i in range(4) for j in range(4)]]
+            sig, p = compiled
+            parts = [sig, [p]]
             st.compiled = True
         elif self.plastic is not None:
             parts.append(to_vec(up.sigma_rot))

@@ -112,15 +112,18 @@ class PointsReturn:
     sig: np.ndarray          # (N, 4) stress
     p: np.ndarray            # (N,) equivalent plastic strain
     index: np.ndarray        # (k,) the points that yield
-    D: np.ndarray            # (k, 4, 4) d sig / d sig_tr there (elsewhere elastic_tangent(model))
+    D: np.ndarray | None     # (k, 4, 4) d sig / d sig_tr there (elsewhere elastic_tangent(model)), or
+                             # None if not asked for
     deps_p: np.ndarray       # (k, 4) plastic strain increment there (elsewhere 0)
 
 
 def j2_return_points(sig_tr: np.ndarray, p_n: ArrayLike, elastic: Elastic, hardening: Hardening,
-                     model: str) -> PointsReturn:
+                     model: str, tangent: bool = True) -> PointsReturn:
     """:func:`j2_return` without its checks, with the tangent and the plastic strain increment only at
     the points that yield (the model's stress evaluation calls it at every residual evaluation: most
-    points are elastic, and a full (N, 4, 4) tangent per call costs more than the return itself)."""
+    points are elastic, and a full (N, 4, 4) tangent per call costs more than the return itself).
+    ``tangent`` False leaves D out (None) where the model can do without it: plane strain and
+    axisymmetry, whose Jacobian applies D from the returned state (return_maps_ufl.j2_tangent_times)."""
     p_n = np.broadcast_to(np.asarray(p_n, dtype=float), sig_tr.shape[:1])
     if model == "plane_stress":
         return _j2_plane_stress(sig_tr, p_n, elastic, hardening)
@@ -137,6 +140,8 @@ def j2_return_points(sig_tr: np.ndarray, p_n: ArrayLike, elastic: Elastic, harde
     ratio = dp / q_i
     sig[i] -= (three_mu * dp)[:, None] * n
     p[i] = pn_i + dp
+    if not tangent:
+        return PointsReturn(sig, p, i, None, 1.5 * dp[:, None] * n)
     theta = 1.0 - three_mu * ratio
     c = 1.5 * three_mu * (1.0 / (three_mu + h) - ratio)
     # D = 1/3 (1 x 1) + theta P_dev - c n (x) W n: broadcast over few points, entry by entry over

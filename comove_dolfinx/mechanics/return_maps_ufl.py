@@ -15,16 +15,17 @@ the hardening table), and the tests check them against each other. Stresses are 
 a new table of the same length does not compile new code).
 
 The radial return is also compiled into the stress evaluation at the quadrature points
-(:func:`j2_return_points`, plane strain and axisymmetry): one generated kernel gives the stress, the
-plastic strain and the derivative D = d sigma / d sigma_trial at every point, as NumPy's
-return_maps.j2_return_points does in several passes over the arrays (docs/performance.md).
+(:func:`j2_return_points`, plane strain and axisymmetry): one generated kernel gives the stress and the
+plastic strain at every point, as NumPy's return_maps.j2_return_points does in several passes over the
+arrays; the Jacobian applies the return's derivative D = d sigma / d sigma_trial from that state
+(:func:`j2_tangent_times`), so that no evaluation of the stress computes or stores D
+(docs/performance.md).
 """
 from __future__ import annotations
 
-import numpy as np
 import ufl
 
-from .material_data import ONE, PDEV, Hardening
+from .material_data import Hardening
 
 # floor under squared norms whose square root is taken (its branch is never the selected one there)
 _TINY = 1e-300
@@ -90,27 +91,43 @@ def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
 
 
 def j2_return_points(sig_tr, p_n, elastic, hardening: Hardening):
-    """The radial return of return_maps.j2_return_points in UFL, on 4-vectors (xx, yy, zz, xy):
-    (stress, plastic strain, D) with D = d sigma / d sigma_tr (4x4, the xy column counting both
-    shear entries) = 1/3 (1 x 1) + theta P_dev - c n x W n at a yielding point, theta =
-    1 - 3 mu dp / q, c = 3/2 3 mu (1 / (3 mu + H) - dp / q), the identity elsewhere
-    (docs/theory.md section 4.2). Plane strain and axisymmetry."""
+    """The radial return of return_maps.j2_return_points in UFL, on 4-vectors (xx, yy, zz, xy): (stress,
+    plastic strain). Its derivative D = d sigma / d sigma_tr is not evaluated here: the Jacobian applies
+    it from the stored state (:func:`j2_tangent_times`). Plane strain and axisymmetry."""
     m = (sig_tr[0] + sig_tr[1] + sig_tr[2]) / 3.0
     s = ufl.as_vector([sig_tr[0] - m, sig_tr[1] - m, sig_tr[2] - m, sig_tr[3]])
     q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
     three_mu = 3.0 * elastic.mu
-    dp, h = _solve_dp_slope(hardening, q, p_n, three_mu)
-    n = s / q
+    dp = _solve_dp(hardening, q, p_n, three_mu)
     # one switch, 1 where the point yields: each conditional of its own would evaluate the yield
     # test again in the generated code
     y = ufl.conditional(ufl.gt(q, sigma_y(hardening, p_n)), 1.0, 0.0)
-    theta = 1.0 - three_mu * dp / q
-    c = 1.5 * three_mu * (1.0 / (three_mu + h) - dp / q)
-    Wn = ufl.as_vector([n[0], n[1], n[2], 2.0 * n[3]])
-    Dp = ufl.as_matrix((np.outer(ONE, ONE) / 3.0).tolist()) + theta * ufl.as_matrix(PDEV.tolist()) \
-        - c * ufl.outer(n, Wn)
-    I4 = ufl.Identity(4)
-    return sig_tr - y * three_mu * dp * n, p_n + y * dp, I4 + y * (Dp - I4)
+    return sig_tr - y * three_mu * dp / q * s, p_n + y * dp
+
+
+def j2_tangent_times(sig, p, p_n, x, elastic, hardening: Hardening):
+    """D x, D = d sigma / d sigma_tr of the radial return (as in :func:`j2_return_points`), from the
+    state the return left at the point: the stress sig (4-vector), its plastic strain p and p_n of
+    the last converged increment. A point yields in the increment where p > p_n; there dp = p - p_n,
+    n = dev(sig) / q with q the equivalent stress of sig (the trial stress's direction: the return is
+    radial), the trial's q_tr = q + 3 mu dp, and H the slope of the segment holding p (right-
+    continuous, as the segment Hardening.solve_dp finds). Elsewhere D x = x. The Jacobian thus needs
+    no stored D: only the stress and plastic strain that the return stores anyway (plane strain and
+    axisymmetry; docs/theory.md section 4.2)."""
+    m = (sig[0] + sig[1] + sig[2]) / 3.0
+    s = ufl.as_vector([sig[0] - m, sig[1] - m, sig[2] - m, sig[3]])
+    q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
+    three_mu = 3.0 * elastic.mu
+    dp = p - p_n
+    ratio = dp / (q + three_mu * dp)                    # dp / q_tr
+    theta = 1.0 - three_mu * ratio
+    c = 1.5 * three_mu * (1.0 / (three_mu + slope(hardening, p)) - ratio)
+    n = s / q
+    tr_x = (x[0] + x[1] + x[2]) / 3.0
+    dev_x = ufl.as_vector([x[0] - tr_x, x[1] - tr_x, x[2] - tr_x, x[3]])
+    nWx = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + 2.0 * n[3] * x[3]
+    Dx = ufl.as_vector([tr_x, tr_x, tr_x, 0.0]) + theta * dev_x - c * nWx * n
+    return x + ufl.conditional(ufl.gt(p, p_n), 1.0, 0.0) * (Dx - x)
 
 
 def j2_return_plane_stress(sig_tr, p_n, elastic, hardening: Hardening, newton_steps: int = 12):

@@ -2,8 +2,9 @@
 
 Quadrature functions (4-vectors xx, yy, zz, xy; see kinematics.py): ``sigma_n`` the converged state of
 increment n (the stress, or for the polar update the unrotated stress), ``sigma`` the stress at the
-current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain, ``D`` the
-derivative of the return map; in plane-stress plasticity ``F22_n``/``F22``
+current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain; in
+plane-stress plasticity ``D``, the derivative of the return map (the other models' Jacobian applies
+it from sigma, p and p_n), ``F22_n``/``F22``
 the thickness stretch, F22 = F22_n exp(ezz), and ``G_tr``/``G_rot`` the derivatives of ezz
 (docs/theory.md section 4.3).
 
@@ -41,8 +42,9 @@ class QuadratureState:
         self.sigma = r.function((4,), "sigma")
         self.p_n = r.function((), "p_n") if plastic else None
         self.p = r.function((), "p") if plastic else None
-        # d sig / d sig_tr: elastic everywhere but at the points that yielded in the last evaluation
-        self.D = r.function((4, 4), "D", rm.elastic_tangent(kind)) if plastic else None
+        # d sig / d sig_tr, elastic everywhere but at the points that yielded in the last evaluation:
+        # stored only for a law whose Jacobian cannot apply it from the state (store_tangent)
+        self.D = None
         self._yielding = np.zeros(0, dtype=np.int64)
         self.F22_n = self.F22 = self.G_tr = self.G_rot = None
         if plastic and kind == "plane_stress":
@@ -55,11 +57,16 @@ class QuadratureState:
         self._fit_degree = max(degree - 1, 0)
         self._facet: dict = {}
 
+    def store_tangent(self) -> None:
+        """Keep D = d sig / d sig_tr at the points, written by every evaluation (the plane-stress
+        return; the model asks for it when the law has no :meth:`Plastic.tangent_times`)."""
+        self.D = self.rule.function((4, 4), "D", rm.elastic_tangent(self.kind))
+
     # -- the constitutive stage (local to the rank: no collective call) -------------------------
     def evaluate(self, vals: np.ndarray) -> None:
         """From the evaluated update (columns: trial stress, rotated old stress if plastic, the
         update's own state if any, det F; or with ``compiled``: stress, p, D, ..., det F) to the
-        stress and tangents at the points."""
+        stress (and, where stored, the tangents) at the points."""
         detF = vals[:, -1]
         if not np.all(np.isfinite(vals)):
             raise ReturnMapFailure("the stress update returned NaN (increment too large?)")
@@ -72,17 +79,18 @@ class QuadratureState:
         elif self.compiled:                    # the return map was evaluated with the update
             view(self.sigma)[:] = vals[:, 0:4]
             self.p.x.array[:] = vals[:, 4]
-            view(self.D).reshape(-1, 16)[:] = vals[:, 5:21]
-            col = 21
+            col = 5
         else:
             sig_rot, col = vals[:, 4:8], 8
-            out = self.plastic.update(sig_rot, sig_tr, self.p_n.x.array, self.kind)
+            out = self.plastic.update(sig_rot, sig_tr, self.p_n.x.array, self.kind,
+                                      tangent=self.D is not None)
             view(self.sigma)[:] = out.sig
             self.p.x.array[:] = out.p
-            D = view(self.D)
-            D[self._yielding] = rm.elastic_tangent(self.kind)       # those of the last evaluation
-            D[out.index] = out.D
-            self._yielding = out.index
+            if self.D is not None:
+                D = view(self.D)
+                D[self._yielding] = rm.elastic_tangent(self.kind)       # those of the last evaluation
+                D[out.index] = out.D
+                self._yielding = out.index
             if self.F22 is not None:
                 self.F22.x.array[:] = self.F22_n.x.array * np.exp(out.ezz)
                 view(self.G_tr)[:] = out.dezz_tr
