@@ -111,7 +111,9 @@ def j2_tangent_times(sig, p, p_n, x, elastic, hardening: Hardening):
     the last converged increment. A point yields in the increment where p > p_n; there dp = p - p_n,
     n = dev(sig) / q with q the equivalent stress of sig (the trial stress's direction: the return is
     radial), the trial's q_tr = q + 3 mu dp, and H the slope of the segment holding p (right-
-    continuous, as the segment Hardening.solve_dp finds). Elsewhere D x = x. The Jacobian thus needs
+    continuous, as the segment Hardening.solve_dp finds). Elsewhere D x = x (also where dp is below
+    the round-off of p_n: within round-off of the yield switch, where either tangent is one of its
+    sides). The Jacobian thus needs
     no stored D: only the stress and plastic strain that the return stores anyway (plane strain and
     axisymmetry; docs/theory.md section 4.2)."""
     m = (sig[0] + sig[1] + sig[2]) / 3.0
