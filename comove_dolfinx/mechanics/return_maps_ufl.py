@@ -113,9 +113,8 @@ def j2_tangent_times(sig, p, p_n, x, elastic, hardening: Hardening):
     radial), the trial's q_tr = q + 3 mu dp, and H the slope of the segment holding p (right-
     continuous, as the segment Hardening.solve_dp finds). Elsewhere D x = x (also where dp is below
     the round-off of p_n: within round-off of the yield switch, where either tangent is one of its
-    sides). The Jacobian thus needs
-    no stored D: only the stress and plastic strain that the return stores anyway (plane strain and
-    axisymmetry; docs/theory.md section 4.2)."""
+    sides). The Jacobian thus needs no stored D, only the stress and plastic strain that the return
+    stores anyway (plane strain and axisymmetry; docs/theory.md section 4.1)."""
     m = (sig[0] + sig[1] + sig[2]) / 3.0
     s = ufl.as_vector([sig[0] - m, sig[1] - m, sig[2] - m, sig[3]])
     q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
