@@ -116,7 +116,7 @@ def _order(m):
     # increment starts the next one at its threshold |trial| = s, and a correction that hardly
     # moves it along the obstacle leaves it there; the larger the steps, the likelier one crosses
     # it (from 1e-3, one such point of the Hughes-Winget/Chen state was crossed between h = 2e-6
-    # and 8e-6: orders 1.0 above, 2.0 below)
+    # and 8e-6: orders near 1 above it, 2 below)
     result = taylor_test(m, h0=1e-4, n=10)
     return result.orders, str(result)
 

@@ -171,8 +171,9 @@ class Model:
         # and, in plane-stress plasticity, the thickness stretch's part
         dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
         dsig = to_tensor(dsig_tr)
-        table = self._surface_table() if self.plastic is not None else None
+        table = None
         if self.plastic is not None:
+            table = self._surface_table()
             dsig_rot = to_vec(ufl.derivative(up.sigma_rot, u, self.u_trial))
             Dx = self.plastic.tangent_times(st.sigma, st.p, st.p_n, dsig_tr, self.kin.model,
                                             self.constants, table)

@@ -68,17 +68,21 @@ def slope(hardening: Hardening, p):
 def _solve_dp(hardening: Hardening, q, pn, three_mu):
     """Root dp of q - 3 mu dp - sigma_y(p_n + dp) = 0: the first segment whose end already makes
     the residual negative holds it (as Hardening.solve_dp)."""
-    return _solve_dp_slope(hardening, q, pn, three_mu)[0]
-
-
-def _solve_dp_slope(hardening: Hardening, q, pn, three_mu):
-    """(dp, the slope of the segment that holds the root), as Hardening.solve_dp."""
     p0, s0, _ = hardening.segments
     a, b, c = _segment(hardening, lambda k: ufl.And(
         ufl.lt(pn, p0[k + 1]), ufl.lt(q - three_mu * (p0[k + 1] - pn) - s0[k + 1], 0.0)))
     start = ufl.max_value(pn, a)
     g = q - three_mu * (start - pn) - (b + c * (start - a))
-    return start - pn + g / (three_mu + c), c
+    return start - pn + g / (three_mu + c)
+
+
+def _deviator_points(sig):
+    """(deviator, equivalent stress) of a stress 4-vector (xx, yy, zz, xy; the shear counted twice
+    in s:s)."""
+    m = (sig[0] + sig[1] + sig[2]) / 3.0
+    s = ufl.as_vector([sig[0] - m, sig[1] - m, sig[2] - m, sig[3]])
+    q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
+    return s, q
 
 
 def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
@@ -94,9 +98,7 @@ def j2_return_points(sig_tr, p_n, elastic, hardening: Hardening):
     """The radial return of return_maps.j2_return_points in UFL, on 4-vectors (xx, yy, zz, xy): (stress,
     plastic strain). Its derivative D = d sigma / d sigma_tr is not evaluated here: the Jacobian applies
     it from the stored state (:func:`j2_tangent_times`). Plane strain and axisymmetry."""
-    m = (sig_tr[0] + sig_tr[1] + sig_tr[2]) / 3.0
-    s = ufl.as_vector([sig_tr[0] - m, sig_tr[1] - m, sig_tr[2] - m, sig_tr[3]])
-    q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
+    s, q = _deviator_points(sig_tr)
     three_mu = 3.0 * elastic.mu
     dp = _solve_dp(hardening, q, p_n, three_mu)
     # one switch, 1 where the point yields: each conditional of its own would evaluate the yield
@@ -115,9 +117,7 @@ def j2_tangent_times(sig, p, p_n, x, elastic, hardening: Hardening):
     the round-off of p_n: within round-off of the yield switch, where either tangent is one of its
     sides). The Jacobian thus needs no stored D, only the stress and plastic strain that the return
     stores anyway (plane strain and axisymmetry; docs/theory.md section 4.1)."""
-    m = (sig[0] + sig[1] + sig[2]) / 3.0
-    s = ufl.as_vector([sig[0] - m, sig[1] - m, sig[2] - m, sig[3]])
-    q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
+    s, q = _deviator_points(sig)
     three_mu = 3.0 * elastic.mu
     dp = p - p_n
     ratio = dp / (q + three_mu * dp)                    # dp / q_tr
