@@ -238,6 +238,8 @@ class Contact(Item):
             if self.method == "penalty":
                 self._ufl["e"] = self._e_new * phi * dsc
         self._compiled = {}
+        if "e" in self._ufl:            # every commit needs it: compiled with the model's forms
+            self._form("e")
         self.pressure = fem.Function(S, name="contact_pressure")
         self.shear = fem.Function(S, name="contact_shear")
         self._vec = compat.create_vector(self._form("mass"))

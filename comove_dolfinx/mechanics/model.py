@@ -206,6 +206,10 @@ class Model:
             st.state_new = np.zeros((self.rule.size, 4))
         parts.append(ufl.as_vector([ufl.det(self.update.F(u))]))
         self._eval = self.rule.expression(ufl.as_vector([c for p in parts for c in p]))
+        # det F at the cells' nodes (vertices and, for P2, edge midpoints): folded_at_nodes
+        pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
+                       ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if self.degree == 2 else []))
+        self._nodal_det = compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(u)), pts)
         self.set_load(0.0)
 
     def _surface_table(self):
@@ -296,10 +300,6 @@ class Model:
         """Why the current iterate is inadmissible at the nodes, or None: the element map folds
         where det F <= 0 at a node of a cell (its vertices and, for P2, edge midpoints), which the
         quadrature points alone can miss. One evaluation per converged increment."""
-        if getattr(self, "_nodal_det", None) is None:
-            pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
-                           ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if self.degree == 2 else []))
-            self._nodal_det = compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(self.u)), pts)
         vals = compat.evaluate(self._nodal_det, self.mesh, self.rule.cells)
         worst = self.comm.allreduce(float(vals.min()) if vals.size else np.inf, op=MPI.MIN)
         if worst > 0.0:

@@ -146,8 +146,10 @@ class IncrementalSolver:
         ref = _path_rate(past[-3:])
         imap = self.model.V.dofmap.index_map
         n = imap.size_local * self.model.V.dofmap.index_map_bs
-        local = np.array([np.sum((rate.x.array[:n] - ref[:n]) ** 2), np.sum(chord[:n] ** 2)])
-        diff2, chord2 = self.model.comm.allreduce(local, op=MPI.SUM)
+        d = rate.x.array[:n] - ref[:n]
+        sums = np.array([d @ d, chord[:n] @ chord[:n]])
+        self.model.comm.Allreduce(MPI.IN_PLACE, sums, op=MPI.SUM)     # (a buffer: no pickling)
+        diff2, chord2 = sums
         return bool(diff2 <= self.steps.chord_tol ** 2 * chord2)
 
     def run(self, callbacks=(), progress=None) -> RunResult:

@@ -34,7 +34,6 @@ from __future__ import annotations
 import logging
 import time
 from collections import defaultdict
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,19 +58,29 @@ class Timer:
         self.totals: dict[str, float] = defaultdict(float)
         self.clock = clock
 
-    @contextmanager
-    def __call__(self, name: str):
-        t0 = self.clock()
-        try:
-            yield
-        finally:
-            self.totals[name] += self.clock() - t0
+    def __call__(self, name: str) -> "_Span":
+        return _Span(self, name)
 
     def report(self) -> str:
         total = sum(self.totals.values())
         parts = [f"{k} {v:.2f} s ({100 * v / total:.0f} %)" for k, v in
                  sorted(self.totals.items(), key=lambda kv: -kv[1])] if total else []
         return "timing: " + ", ".join(parts)
+
+
+class _Span:
+    """One timed stretch of a :class:`Timer` (a plain context manager: several per iteration)."""
+
+    __slots__ = ("timer", "name", "t0")
+
+    def __init__(self, timer: Timer, name: str):
+        self.timer, self.name = timer, name
+
+    def __enter__(self) -> None:
+        self.t0 = self.timer.clock()
+
+    def __exit__(self, *exc) -> None:
+        self.timer.totals[self.name] += self.timer.clock() - self.t0
 
 
 @dataclass
@@ -118,6 +127,8 @@ class Newton(LineSearches):
             raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")
         if self.settings.scale not in ("initial", "force"):
             raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
+        if self.settings.scale == "force":     # every residual assembles these two: compiled here,
+            _ = model.internal_force_form, model.items_form     # not in the first increment
         self._b_old = self.b.duplicate()
         self._f = self.b.duplicate()
         self._w = self.b.duplicate()          # scratch: the constraint gap g - u
