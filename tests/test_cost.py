@@ -20,6 +20,10 @@ def test_floor_study_writes_a_consistent_table(tmp_path):
     assert float(row["residuals_per_it"]) >= 1.0
     timed = sum(float(row[f"{k}_s_per_it"]) for k in ("solve", "jacobian", "assembly", "stress_update"))
     assert 0.0 < timed <= float(row["iteration_cpu_s"]) * 1.05 and np.isfinite(float(row["ratio"]))
+    # with one run, its timed parts and the rest outside them make up its time per iteration
+    parts = timed + sum(float(row[f"{k}_s_per_it"]) for k in ("force_scale", "predictor"))
+    assert float(row["other_s_per_it"]) >= 0.0
+    assert parts + float(row["other_s_per_it"]) == pytest.approx(float(row["iteration_cpu_s"]), rel=1e-9)
 
 
 def test_scene_parameters_reach_the_runs_and_bad_ones_are_refused(capsys):
