@@ -143,7 +143,8 @@ class Model:
                        lambda: FacetBase(self.state, self.u_n))
 
     def finalize(self, jit_options: dict | None = None, compiled_return: bool = True) -> None:
-        """Build and compile the residual, the Jacobian and the stress evaluation (once).
+        """Build and compile the residual, the Jacobian, the stress evaluation and the nodal det F
+        check (once).
         ``compiled_return``: the return map of a plastic body in the generated stress evaluation
         (True, where the law has a compiled form: plane strain and axisymmetry) or in NumPy (False;
         plane stress always). Compiled, one pass over the points gives the stress and the plastic
