@@ -11,9 +11,8 @@ differentiation of P at fixed sigma, the material part from UFL differentiation 
 mapped by the return map's derivative D = d sigma / d sigma_trial (identity for elastic materials,
 where UFL differentiates the update directly; applied from the stored stress and plastic strain in
 plane strain and axisymmetry, stored by each evaluation in plane stress), and in plane-stress
-plasticity the part of the
-thickness stretch, dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot). A Taylor test checks it
-(taylor.py, tests/test_taylor.py).
+plasticity the part of the thickness stretch, dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot).
+A Taylor test checks it (taylor.py, tests/test_taylor.py).
 
 Items (loads.py, contact/) build their terms from a :class:`Context` handed to them once: data flows
 from the model to the items, never back. The load factor t of ``set_load`` sets every item.

@@ -65,7 +65,7 @@ class QuadratureState:
     # -- the constitutive stage (local to the rank: no collective call) -------------------------
     def evaluate(self, vals: np.ndarray) -> None:
         """From the evaluated update (columns: trial stress, rotated old stress if plastic, the
-        update's own state if any, det F; or with ``compiled``: stress, p, D, ..., det F) to the
+        update's own state if any, det F; or with ``compiled``: stress, p, ..., det F) to the
         stress (and, where stored, the tangents) at the points."""
         detF = vals[:, -1]
         if not np.all(np.isfinite(vals)):
