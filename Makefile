@@ -118,6 +118,7 @@ cost: venv
 	$(PY) -m comove_dolfinx.cost solvers --out results/cost
 	$(PY) -m comove_dolfinx.cost scale --out results/cost
 	$(MPIRUN) $(PY) -m comove_dolfinx.cost scale --out results/cost
+	$(PY) -m comove_dolfinx.cost slopes --out results/cost
 
 clean:
 	rm -rf $(VENV) results .pytest_cache

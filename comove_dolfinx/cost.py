@@ -4,6 +4,7 @@ files and charts, never asserts (docs/performance.md).
     python -m comove_dolfinx.cost floor   --out results/cost   # ring: iteration vs linear-elastic floor
     python -m comove_dolfinx.cost solvers --out results/cost   # ring: direct solvers, orderings, GAMG
     mpirun -n 2 python -m comove_dolfinx.cost scale --out results/cost   # ring, plate: 1 or 2 ranks
+    python -m comove_dolfinx.cost slopes  --out results/cost   # ring: the residual along du
 
 floor: per ring size, the CPU time of one Newton iteration of the real run (the scene's first
 ``--increments`` nominal increments, predictor, line searches, cut-backs and failed iterations
@@ -17,6 +18,11 @@ solvers: per ring size and solver configuration (PETSc options under comove_), t
 factorisation and solve of the real tangent, and of the short run.
 scale: per scene, size and number of ranks (run once serial, once under mpirun, rows appended),
 wall and CPU time (summed over ranks) per Newton iteration of a short run, MUMPS against GAMG.
+slopes: why the line search spends trials. In the ring's run (``--sizes``, default 0.058, about 18k
+dofs), at the first four corrections past the load factor 0.2 (delta = 1.32) whose full step
+overshoots (s(1) > 0.5 |s(0)|, s(a) = du . R(u + a du)), the secant slope (s(a) - s(0)) / (a |s(0)|)
+at steps a from 1e-5 to 1, and its internal force's part: 1 as a -> 0 for an exact tangent, and it
+stays near 1 where the residual is smooth along du. The run goes on as without the probe.
 
 CPU time is ``time.process_time`` (the process's, not the machine's); every figure is the median of
 ``--repeats`` runs with its spread (max - min) beside it. Other processes on the machine lengthen
@@ -94,14 +100,16 @@ def build(name: str, size: float, overrides=()) -> tuple:
 
 
 def short_run(name: str, size: float, increments: int, options: dict | None = None,
-              count: bool = False, between=None, overrides=()) -> dict:
+              count: bool = False, between=None, overrides=(), monitor=None) -> dict:
     """The scene's first ``increments`` nominal increments (its own predictor and Newton settings,
     the linear solver's ``options``): CPU and wall time of the run (max over ranks for wall, sum
     for CPU), iterations (failed ones included), residual evaluations, the Timer's split.
     ``between``: called after every converged increment, its CPU time taken out of the run's.
-    ``overrides``: scene parameters, "key=value" (the predictor, ...)."""
+    ``overrides``: scene parameters, "key=value" (the predictor, ...); ``monitor``: Newton's
+    (solver/newton.py)."""
     scene, model = build(name, size, overrides)
-    settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}))
+    settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}),
+                                   monitor=monitor)
     steps = dataclasses.replace(scene.steps()[0].settings(), n_steps=increments,
                                 t_end=increments / scene.n_steps)
     timer = Timer(time.process_time)
@@ -413,20 +421,73 @@ def scale(out: pathlib.Path, scenes=SCALE, repeats: int = 3, increments: int = 1
     return rows
 
 
+SLOPE_STEPS = (1e-5, 1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.2, 0.5, 1.0)
+
+
+class SlopeProbe:
+    """A Newton monitor that looks along the corrections which overshoot: after load ``after``, at
+    the first ``count`` corrections with s(0) < 0 and s(1) > ``overshoot`` |s(0)| (s(a) = du . R(u +
+    a du)), the secant slopes (s(a) - s(0)) / (a |s(0)|) at ``steps``, whole and the internal
+    force's part (Newton.along). ``cases``: one dict per correction (load, iteration, s0, and rows
+    of (a, slope, internal part))."""
+
+    def __init__(self, steps=SLOPE_STEPS, count: int = 4, after: float = 0.2, overshoot: float = 0.5):
+        self.steps, self.count, self.after, self.overshoot = tuple(steps), count, after, overshoot
+        self.cases: list[dict] = []
+
+    def correction(self, newton, it: int) -> None:
+        if len(self.cases) >= self.count or newton.model.load <= self.after:
+            return
+        (_, s0, f0), (_, s1, _) = newton.along((0.0, 1.0))
+        if not (s0 < 0.0 and s1 > self.overshoot * abs(s0)):
+            return
+        rows = [(a, (s - s0) / (a * abs(s0)), (f - f0) / (a * abs(s0)))
+                for a, s, f in newton.along(self.steps)]
+        self.cases.append({"load": newton.model.load, "iteration": it, "s0": s0, "rows": rows})
+
+
+def slopes(out: pathlib.Path, sizes=(0.058,), increments: int = 36, count: int = 4,
+           after: float = 0.2, overrides=()) -> list[dict]:
+    """The ring's run with a :class:`SlopeProbe`: slopes.csv (one row per case and step) and
+    slopes.png (the secant slope against the step, one line per case)."""
+    rows, series = [], {}
+    for size in sizes:
+        probe = SlopeProbe(count=count, after=after)
+        run = short_run("ring", size, increments, overrides=overrides, monitor=probe)
+        for case in probe.cases:
+            label = f"{run['dofs']} dofs, load {case['load']:.4f}, correction {case['iteration']}"
+            series[label] = ([r[0] for r in case["rows"]], [r[1] for r in case["rows"]],
+                             [0.0] * len(case["rows"]))
+            for a, slope, internal in case["rows"]:
+                rows.append({"size": size, "dofs": run["dofs"], "load": case["load"],
+                             "iteration": case["iteration"], "s0": case["s0"], "step": a,
+                             "slope": slope, "internal_slope": internal,
+                             "items_slope": slope - internal})
+            _say(f"{label}: " + " ".join(f"{a:g}:{slope:.3f}" for a, slope, _ in case["rows"]))
+        if not probe.cases:
+            _say(f"ring size {size}: no correction overshot after the load factor {after}")
+    _write_csv(out / "slopes.csv", rows)
+    if series:
+        _chart(out / "slopes.png", series, "step a along the correction du",
+               "(s(a) - s(0)) / (a |s(0)|)", "ring: the residual along Newton's correction "
+               "(1: the tangent's slope)", logy=False)
+    return rows
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(prog="python -m comove_dolfinx.cost", description=__doc__.split("\n")[0])
-    p.add_argument("study", choices=("floor", "solvers", "scale"))
+    p.add_argument("study", choices=("floor", "solvers", "scale", "slopes"))
     p.add_argument("--out", default="results/cost")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--increments", type=int, default=None, help="nominal increments of each short run")
-    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers)")
+    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers, slopes)")
     p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
     p.add_argument("--scenes", default="ring,plate", help="comma-separated scenes (scale)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="overrides",
-                   help="a parameter of the ring scene for its runs (floor), e.g. predictor=linear")
+                   help="a parameter of the ring scene for its runs (floor, slopes), e.g. predictor=linear")
     a = p.parse_args(argv)
-    if a.overrides and a.study != "floor":
-        p.error("--set applies to the floor study only")
+    if a.overrides and a.study not in ("floor", "slopes"):
+        p.error("--set applies to the floor and slopes studies only")
     try:
         get_scene("ring", a.overrides)
     except SceneError as err:
@@ -443,6 +504,9 @@ def main(argv=None) -> None:
         kw["sizes"] = tuple(float(s) for s in a.sizes.split(","))
     if a.study == "floor":
         floor(out, overrides=tuple(a.overrides), **kw)
+    elif a.study == "slopes":
+        kw.pop("repeats")
+        slopes(out, overrides=tuple(a.overrides), **kw)
     elif a.study == "solvers":
         solvers(out, names=a.solvers.split(",") if a.solvers else None, **kw)
     else:

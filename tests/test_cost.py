@@ -39,3 +39,26 @@ def test_scene_parameters_reach_the_runs_and_bad_ones_are_refused(capsys):
         cost.main(["floor", "--set", "predictor=bogus", "--sizes", "0.22"])
     err = capsys.readouterr().err.strip().splitlines()
     assert "predictor = 'bogus'" in err[-1] and "tangent" in err[-1]
+
+
+def test_slope_probe_sees_the_exact_tangent_and_leaves_the_run_as_it_was(tmp_path):
+    """Along Newton's own corrections of the ring (first contact and yield), the residual's secant
+    slope (s(a) - s(0)) / (a |s(0)|), s(a) = du . R(u + a du), tends to the tangent's, 1, as the step
+    shrinks: a Jacobian that missed or mis-scaled a part along du would leave it away from 1. The
+    probe evaluates the residual along du and goes back: the run is the same to the last bit."""
+    probe = cost.SlopeProbe(count=3, after=0.0, overshoot=0.0)
+    run = cost.short_run("ring", 0.22, 6, monitor=probe)
+    plain = cost.short_run("ring", 0.22, 6)
+    assert run["iterations"] == plain["iterations"]
+    assert np.array_equal(run["model"].u.x.array, plain["model"].u.x.array)
+    assert len(probe.cases) == 3
+    for case in probe.cases:
+        slope = {a: s for a, s, _ in case["rows"]}
+        assert case["s0"] < 0.0 and slope[1.0] > 1.0          # each of them overshoots
+        assert abs(slope[1e-5] - 1.0) < 1e-3
+        assert abs(slope[1e-4] - 1.0) < 1e-2
+    # the command writes the cases' rows (one per step) and the chart
+    cost.main(["slopes", "--sizes", "0.22", "--increments", "24", "--out", str(tmp_path)])
+    rows = read_table(tmp_path / "slopes.csv")
+    assert len(rows) % len(cost.SLOPE_STEPS) == 0 and rows
+    assert (tmp_path / "slopes.png").stat().st_size > 0

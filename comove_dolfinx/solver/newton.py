@@ -25,6 +25,9 @@ Observation: ``NewtonSettings.monitor`` is an object with any of the methods
 * ``rejected(newton, error)``: when the stress update of an iterate (a Newton iterate or a line
   search's trial) raises :class:`InvertedElement` or :class:`ReturnMapFailure`,
   before the solver handles it; ``model.u`` still holds that iterate (a line search then goes back);
+* ``correction(newton, it)``: after the linear solve of correction ``it``, before the line search
+  (``model.du`` holds the correction, ``b`` = -R at ``model.u``); it may look along du with
+  :meth:`Newton.along`, which leaves the iteration as it was;
 * ``solved(newton, ok, its, reason)``: when :meth:`Newton.solve` returns, with what it returns.
 
 It watches and must not change the model. Without a monitor (the default) nothing is called.
@@ -242,6 +245,7 @@ class Newton(LineSearches):
             dnorm = compat.petsc_vec(m.du).norm()
             if not np.isfinite(dnorm):
                 return False, it, "the Newton correction is not finite (singular tangent?)"
+            self._notify("correction", it)
             if self.line_search == "energy":
                 self.b.copy(self._b_old)
                 rnorm, alpha, err = self._energy_search(rnorm)
@@ -260,6 +264,33 @@ class Newton(LineSearches):
                 return True, it, "converged"
         converged = self._converged(rnorm, s.max_it)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
+
+    def along(self, steps) -> list[tuple[float, float, float]]:
+        """(a, s(a), f(a)) for each step a along the current correction du: s(a) = du . R(u + a du),
+        the line searches' function, and f(a) = du . F_int(u + a du), its internal force's part
+        (the rest is the items' terms). A step whose stress update is inadmissible gives NaN (and
+        the monitor hears of it as ``rejected``). Afterwards u, the state and b (= -R) are those of
+        the iterate again, evaluated anew from the same data: the iteration goes on as it would
+        have. Its evaluations count in the Timer (stress update, assembly). docs/performance.md,
+        the line search's trials."""
+        m = self.model
+        u0 = m.u.x.array.copy()
+        du = compat.petsc_vec(m.du)
+        out = []
+        try:
+            for a in steps:
+                m.u.x.array[:] = u0 + a * m.du.x.array
+                try:
+                    self.residual()
+                except (InvertedElement, ReturnMapFailure):
+                    out.append((float(a), np.nan, np.nan))
+                    continue
+                compat.assemble_vector(self._f, m.internal_force_form)
+                out.append((float(a), -self.b.dot(du), self._f.dot(du)))
+        finally:
+            m.u.x.array[:] = u0
+            self.residual()
+        return out
 
     def load_terms(self, out: PETSc.Vec) -> None:
         """-(R - F_int) at the current iterate and load factor into ``out``: the items' terms and
