@@ -44,8 +44,10 @@ def test_scene_parameters_reach_the_runs_and_bad_ones_are_refused(capsys):
 def test_slope_probe_sees_the_exact_tangent_and_leaves_the_run_as_it_was(tmp_path):
     """Along Newton's own corrections of the ring (first contact and yield), the residual's secant
     slope (s(a) - s(0)) / (a |s(0)|), s(a) = du . R(u + a du), tends to the tangent's, 1, as the step
-    shrinks: a Jacobian that missed or mis-scaled a part along du would leave it away from 1. The
-    probe evaluates the residual along du and goes back: the run is the same to the last bit."""
+    shrinks: a Jacobian that missed or mis-scaled a part along du would leave it away from 1. Before
+    the residual stiffens well beyond the tangent along du, points that yield at the iterate have
+    unloaded (docs/performance.md). The probe evaluates the residual along du and goes back: the
+    run is the same to the last bit."""
     probe = cost.SlopeProbe(count=3, after=0.0, overshoot=0.0)
     run = cost.short_run("ring", 0.22, 6, monitor=probe)
     plain = cost.short_run("ring", 0.22, 6)
@@ -53,10 +55,16 @@ def test_slope_probe_sees_the_exact_tangent_and_leaves_the_run_as_it_was(tmp_pat
     assert np.array_equal(run["model"].u.x.array, plain["model"].u.x.array)
     assert len(probe.cases) == 3
     for case in probe.cases:
-        slope = {a: s for a, s, _ in case["rows"]}
+        slope = {r[0]: r[1] for r in case["rows"]}
         assert case["s0"] < 0.0 and slope[1.0] > 1.0          # each of them overshoots
         assert abs(slope[1e-5] - 1.0) < 1e-3
         assert abs(slope[1e-4] - 1.0) < 1e-2
+        # the crown yields from the first increment; no point changes at the smallest step
+        assert case["yielding"] > 0 and case["rows"][0][3:] == (0, 0)
+        # the secant first reaches 1.5 times the tangent's slope once points have unloaded
+        stiff = [k for k, r in enumerate(case["rows"]) if r[1] >= 1.5]
+        if stiff:
+            assert any(r[3] > 0 for r in case["rows"][:stiff[0] + 1]), case["rows"]
     # the command writes the cases' rows (one per step) and the chart
     cost.main(["slopes", "--sizes", "0.22", "--increments", "24", "--out", str(tmp_path)])
     rows = read_table(tmp_path / "slopes.csv")

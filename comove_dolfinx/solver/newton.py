@@ -265,14 +265,15 @@ class Newton(LineSearches):
         converged = self._converged(rnorm, s.max_it)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
 
-    def along(self, steps) -> list[tuple[float, float, float]]:
-        """(a, s(a), f(a)) for each step a along the current correction du: s(a) = du . R(u + a du),
-        the line searches' function, and f(a) = du . F_int(u + a du), its internal force's part
-        (the rest is the items' terms). A step whose stress update is inadmissible gives NaN (and
-        the monitor hears of it as ``rejected``). Afterwards u, the state and b (= -R) are those of
-        the iterate again, evaluated anew from the same data: the iteration goes on as it would
-        have. Its evaluations count in the Timer (stress update, assembly). docs/performance.md,
-        the line search's trials."""
+    def along(self, steps, look=None) -> list[tuple]:
+        """(a, s(a), f(a), seen) for each step a along the current correction du: s(a) = du . R(u +
+        a du), the line searches' function, f(a) = du . F_int(u + a du), its internal force's part
+        (the rest is the items' terms), and what ``look(model)`` returns there (None without it).
+        A step whose stress update is inadmissible gives NaN and None (and the monitor hears of it
+        as ``rejected``). Afterwards u, the state and b (= -R) are those of the iterate again,
+        evaluated anew from the same data: the iteration goes on as it would have. Its evaluations
+        count in the Timer (stress update, assembly). docs/performance.md, the line search's
+        trials."""
         m = self.model
         u0 = m.u.x.array.copy()
         du = compat.petsc_vec(m.du)
@@ -283,10 +284,11 @@ class Newton(LineSearches):
                 try:
                     self.residual()
                 except (InvertedElement, ReturnMapFailure):
-                    out.append((float(a), np.nan, np.nan))
+                    out.append((float(a), np.nan, np.nan, None))
                     continue
                 compat.assemble_vector(self._f, m.internal_force_form)
-                out.append((float(a), -self.b.dot(du), self._f.dot(du)))
+                out.append((float(a), -self.b.dot(du), self._f.dot(du),
+                            look(m) if look is not None else None))
         finally:
             m.u.x.array[:] = u0
             self.residual()
