@@ -286,7 +286,8 @@ class Newton(LineSearches):
                 except (InvertedElement, ReturnMapFailure):
                     out.append((float(a), np.nan, np.nan, None))
                     continue
-                compat.assemble_vector(self._f, m.internal_force_form)
+                if self.settings.scale != "force":        # else the residual assembled F_int
+                    compat.assemble_vector(self._f, m.internal_force_form)
                 out.append((float(a), -self.b.dot(du), self._f.dot(du),
                             look(m) if look is not None else None))
         finally:
