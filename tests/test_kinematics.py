@@ -50,6 +50,43 @@ def test_rigid_increment_gives_zero_strain(unit_mesh, deg):
     np.testing.assert_allclose(evaluate(R, unit_mesh), Q, atol=1e-14)
 
 
+@pytest.mark.parametrize("deg, hoop", [(0.0, 0.0), (17.0, 0.04), (60.0, -0.1), (89.0, 0.0)])
+def test_in_plane_split_is_chen_split(unit_mesh, deg, hoop):
+    """The one-angle form of the 2D models (docs/theory.md section 2.2) gives the general split of
+    the 3x3 embedding: a stretch, a shear and a hoop strain after an in-plane rotation; for the
+    rotation alone, R = Q and S = 0 to round-off."""
+    a = np.radians(deg)
+    Q = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    stretch = np.array([[1.04, 0.03, 0.0], [0.01, 0.97, 0.0], [0.0, 0.0, 1.0 + hoop]])
+    H = _const(unit_mesh, Q @ stretch - np.eye(3))
+    general = [evaluate(x, unit_mesh) for x in kin.sr_decomposition(H)]
+    plane = [evaluate(x, unit_mesh) for x in kin.sr_decomposition_in_plane(H)]
+    if deg > 80.0:         # sin(theta) = 1.0005 > 1: out of range (section 2.3), NaN in both
+        assert np.isnan(general[1]).any() and np.isnan(plane[1]).any()
+        assert np.isnan(general[0]).any() and np.isnan(plane[0]).any()
+    else:
+        for g, p in zip(general, plane):
+            np.testing.assert_allclose(p, g, rtol=0, atol=1e-14)
+        S, R, c = plane
+        np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-15)
+        np.testing.assert_allclose(S + R, Q @ stretch, atol=1e-15)
+    S, R, _ = kin.sr_decomposition_in_plane(_const(unit_mesh, Q - np.eye(3)))
+    assert np.abs(evaluate(S, unit_mesh)).max() < 1e-14
+    np.testing.assert_allclose(evaluate(R, unit_mesh), Q, atol=1e-14)
+
+
+def test_in_plane_split_vectors(unit_mesh):
+    """docs/theory.md section 2.5, the 2D vector in the 3x3 embedding (with a hoop strain, which
+    the split leaves in S)."""
+    F = np.array([[1.1, 0.3, 0.0], [-0.2, 0.95, 0.0], [0.0, 0.0, 1.02]])
+    S, R, c = kin.sr_decomposition_in_plane(_const(unit_mesh, F - np.eye(3)))
+    assert evaluate(c, unit_mesh) == pytest.approx(0.968246, abs=1e-6)
+    np.testing.assert_allclose(evaluate(R, unit_mesh), [[0.968246, 0.25, 0], [-0.25, 0.968246, 0], [0, 0, 1]],
+                               atol=1e-6)
+    np.testing.assert_allclose(evaluate(S, unit_mesh), [[0.131754, 0.05, 0], [0.05, -0.018246, 0],
+                                                        [0, 0, 0.02]], atol=1e-6)
+
+
 def _p2_fields(msh):
     V = compat.function_space(msh, "Lagrange", 2, (2,))
     u, v = fem.Function(V), fem.Function(V)

@@ -170,6 +170,27 @@ def sr_decomposition(H):
     return S, R, c
 
 
+def sr_decomposition_in_plane(H):
+    """:func:`sr_decomposition` of a gradient of the 3x3 embedding of a 2D model, whose rotation is
+    about the out-of-plane axis (H02 = H12 = H20 = H21 = 0): the same split written with the one
+    angle, sin(theta) = w = (H10 - H01) / 2 (docs/theory.md section 2.2, 2D and axisymmetry),
+
+        c = sqrt(1 - w^2),  R = [[c, -w, 0], [w, c, 0], [0, 0, 1]],
+        S = sym H + w^2 / (1 + c) diag(1, 1, 0),
+
+    (W.W = -w^2 diag(1, 1, 0), and 1 - w^2 / (1 + c) = c). The general form leaves the zero diagonal
+    of skew H as differences x - x that the generated code evaluates, with everything they multiply,
+    in the stress evaluation and in the Jacobian (docs/performance.md); here every entry that is zero
+    in the embedding is a literal zero. Returns (S, R, c)."""
+    w = 0.5 * (H[1, 0] - H[0, 1])
+    c = ufl.sqrt(1.0 - w * w)
+    k = w * w / (1.0 + c)
+    shear = 0.5 * (H[0, 1] + H[1, 0])
+    S = ufl.as_tensor([[H[0, 0] + k, shear, 0], [shear, H[1, 1] + k, 0], [0, 0, H[2, 2]]])
+    R = ufl.as_tensor([[c, -w, 0], [w, c, 0], [0, 0, 1]])
+    return S, R, c
+
+
 def increment_gradient(F, F_n):
     """Gradient of the increment relative to configuration n: dH = Grad(du) F_n^-1 = F F_n^-1 - I."""
     n = F.ufl_shape[0]

@@ -39,7 +39,7 @@ from .kinematics import (
     embed,
     increment_gradient,
     polar_rotation_2d,
-    sr_decomposition,
+    sr_decomposition_in_plane,
     to_tensor,
     to_vec,
 )
@@ -98,7 +98,7 @@ class SRUpdate(StressUpdate):
 
     def build(self, u, u_n, state_n):
         dH = increment_gradient(self.F(u), self.F(u_n))
-        dS, dR, _ = sr_decomposition(dH)
+        dS, dR, _ = sr_decomposition_in_plane(dH)      # the 2D models' rotation: one angle
         sig_rot = dR * to_tensor(state_n) * dR.T
         sig = sig_rot + hooke(dS, self.elastic, self.kin.model)
         return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
