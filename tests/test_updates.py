@@ -154,3 +154,40 @@ def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n):
     np.testing.assert_allclose(sig[:, [1, 2, 3]], 0.0, atol=1e-9 * E)
     err = abs(discrete - E * np.log(lam)) / (E * np.log(lam))
     assert n * err == pytest.approx(1.0 / (4.0 * np.log(2.0)), rel=0.1)
+
+
+@pytest.mark.parametrize("kind", ["plane_strain", "plane_stress", "axisymmetric"])
+def test_sr_closed_form_linearisation_is_ufl_derivative(tmp_path, kind):
+    """The S-R update's derivatives in closed form (docs/theory.md section 3.2, Linearisation) are
+    UFL's derivatives of its expressions: the matrices of int d sigma : Grad_3 v, for d sigma_tr and
+    d sigma_rot, agree to round-off at a state with a stored stress, a rotating increment of 0.2 rad
+    and, in axisymmetry, a hoop strain."""
+    import ufl
+    from petsc4py import PETSc
+
+    from comove_dolfinx import compat
+    x0 = 0.5 if kind == "axisymmetric" else 0.0
+    md = geometry.rectangle(1.0, 1.0, 0.5, order=2, x0=x0, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
+    m = _point_model(md, "sr", kind=kind)
+    m.u_n.interpolate(lambda x: np.stack([0.05 * x[0] * x[1] + 0.02 * x[0], -0.03 * x[0] ** 2 + 0.01 * x[1]]))
+    Q = _rot(0.2)
+    m.u.interpolate(lambda x: np.stack([0.05 * x[0] * x[1] + 0.02 * x[0], -0.03 * x[0] ** 2 + 0.01 * x[1]])
+                    + (Q @ np.diag([1.03, 0.98]) - np.eye(2)) @ (x[:2] + 0.1 * x[:2] ** 2))
+    sig = m.rule.view(m.state.sigma_n)
+    pts = m.point_coordinates()
+    zz = np.full(len(pts), 0.0 if kind == "plane_stress" else 0.3)
+    sig[:] = np.c_[1.0 + pts[:, 0], -0.5 + pts[:, 1], zz, 0.7 * pts[:, 0]]
+    up = m.update.build(m.u, m.u_n, m.state.sigma_n)
+    closed = m.update.directional(m.u, m.u_n, m.state.sigma_n, m.u_trial, up)
+    generic = updates.StressUpdate.directional(m.update, m.u, m.u_n, m.state.sigma_n, m.u_trial, up)
+    for a, b in zip(closed, generic):
+        mats = []
+        for d in (a, b):
+            form = compat.form(ufl.inner(d, m.kin.grad3(m.v)) * m.kin.weight() * m.rule.dx)
+            A = compat.create_matrix(form)
+            compat.assemble_matrix(A, form)
+            mats.append(A)
+        ref = mats[1].norm()
+        mats[0].axpy(-1.0, mats[1], structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        assert ref > 1e-2
+        assert mats[0].norm() < 1e-12 * ref, (mats[0].norm(), ref)

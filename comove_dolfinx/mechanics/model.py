@@ -169,12 +169,13 @@ class Model:
         self._terms, self._terms_form = terms, None
         # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
         # and, in plane-stress plasticity, the thickness stretch's part
-        dsig_tr = to_vec(ufl.derivative(up.sigma, u, self.u_trial))
+        dsig_tr, dsig_rot = self.update.directional(u, self.u_n, st.sigma_n, self.u_trial, up)
+        dsig_tr = to_vec(dsig_tr)
         dsig = to_tensor(dsig_tr)
         table = None
         if self.plastic is not None:
             table = self._surface_table()
-            dsig_rot = to_vec(ufl.derivative(up.sigma_rot, u, self.u_trial))
+            dsig_rot = to_vec(dsig_rot)
             Dx = self.plastic.tangent_times(st.sigma, st.p, st.p_n, dsig_tr, self.kin.model,
                                             self.constants, table)
             if Dx is None:                     # D stored by the evaluations

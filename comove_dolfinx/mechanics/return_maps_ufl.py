@@ -124,11 +124,14 @@ def j2_tangent_times(sig, p, p_n, x, elastic, hardening: Hardening):
     theta = 1.0 - three_mu * ratio
     c = 1.5 * three_mu * (1.0 / (three_mu + slope(hardening, p)) - ratio)
     n = s / q
+    # D x = x + y ((theta - 1) dev x - c (n : x) n), y = 1 where the point yields: the scalars that
+    # do not depend on x first, since the Jacobian's kernel applies this to each direction of x
+    y = ufl.conditional(ufl.gt(p, p_n), 1.0, 0.0)
+    a, b = y * (theta - 1.0), y * c
     tr_x = (x[0] + x[1] + x[2]) / 3.0
     dev_x = ufl.as_vector([x[0] - tr_x, x[1] - tr_x, x[2] - tr_x, x[3]])
-    nWx = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + 2.0 * n[3] * x[3]
-    Dx = ufl.as_vector([tr_x, tr_x, tr_x, 0.0]) + theta * dev_x - c * nWx * n
-    return x + ufl.conditional(ufl.gt(p, p_n), 1.0, 0.0) * (Dx - x)
+    nWx = b * (n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + 2.0 * n[3] * x[3])
+    return x + a * dev_x - nWx * n
 
 
 def j2_return_plane_stress(sig_tr, p_n, elastic, hardening: Hardening, newton_steps: int = 12):

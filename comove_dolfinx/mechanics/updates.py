@@ -90,6 +90,15 @@ class StressUpdate:
     def build(self, u, u_n, state_n) -> UpdateExpr:  # pragma: no cover - interface
         raise NotImplementedError
 
+    def directional(self, u, u_n, state_n, du, up: UpdateExpr) -> tuple:
+        """(d sigma, d sigma_rot): the derivatives of ``up``'s trial stress and rotated old stress
+        (``build``'s, at u) in the direction du, 3x3 and linear in du, for the Jacobian's material
+        part (docs/theory.md section 5.4); d sigma_rot is None if the update has no rotated stress.
+        UFL's derivative here; an update may give them in closed form."""
+        dsig = ufl.derivative(up.sigma, u, du)
+        drot = ufl.derivative(up.sigma_rot, u, du) if up.sigma_rot is not None else None
+        return dsig, drot
+
 
 class SRUpdate(StressUpdate):
     """Incremental S-R update (docs/theory.md section 3.2), the project's default."""
@@ -102,6 +111,23 @@ class SRUpdate(StressUpdate):
         sig_rot = dR * to_tensor(state_n) * dR.T
         sig = sig_rot + hooke(dS, self.elastic, self.kin.model)
         return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
+
+    def directional(self, u, u_n, state_n, du, up):
+        """In closed form (docs/theory.md section 3.2): with G = d(dH) = dF F_n^-1, the angle's
+        d theta = (G10 - G01) / (2 cos theta), d S = sym G + sin(theta) d theta diag(1, 1, 0) and
+        d sigma_rot = d theta (J sigma_rot - sigma_rot J), J the in-plane quarter turn."""
+        F, F_n = self.F(u), self.F(u_n)
+        H = increment_gradient(F, F_n)
+        G = ufl.derivative(F, u, du) * ufl.inv(F_n)
+        w = 0.5 * (H[1, 0] - H[0, 1])                 # sin(theta), as in sr_decomposition_in_plane
+        dtheta = 0.5 * (G[1, 0] - G[0, 1]) / ufl.sqrt(1.0 - w * w)
+        shear = 0.5 * (G[0, 1] + G[1, 0])
+        dS = ufl.as_tensor([[G[0, 0] + w * dtheta, shear, 0], [shear, G[1, 1] + w * dtheta, 0],
+                            [0, 0, G[2, 2]]])
+        s = up.sigma_rot
+        a, b = s[0, 0] - s[1, 1], 2.0 * s[0, 1]
+        drot = dtheta * ufl.as_tensor([[-b, a, 0], [a, b, 0], [0, 0, 0]])
+        return drot + hooke(dS, self.elastic, self.kin.model), drot
 
 
 def _mid_step(F, F_n):
