@@ -167,8 +167,8 @@ class Model:
                 R = R + term
                 terms = term if terms is None else terms + term
         self._terms, self._terms_form = terms, None
-        # Jacobian: the geometric part (UFL, sigma held), the material part d sigma = D d sigma_tr
-        # and, in plane-stress plasticity, the thickness stretch's part
+        # Jacobian: the geometric part (sigma held), the material part d sigma = D d sigma_tr, the
+        # items' terms (UFL's derivative) and, in plane-stress plasticity, the thickness stretch's part
         dsig_tr, dsig_rot = self.update.directional(u, self.u_n, st.sigma_n, self.u_trial, up)
         dsig_tr = to_vec(dsig_tr)
         dsig = to_tensor(dsig_tr)
@@ -182,8 +182,14 @@ class Model:
                 st.store_tangent()
                 Dx = ufl.dot(st.D, dsig_tr)
             dsig = to_tensor(Dx)
-        Jac = ufl.derivative(R, u, self.u_trial) + \
-            ufl.inner(J * dsig * ufl.inv(F).T, self.kin.grad3(v)) * w * dx
+        # the geometric part in closed form (sigma held): d(J F^-T) = J (tr(F^-1 dF) F^-T - F^-T dF^T F^-T),
+        # shorter in the generated code than UFL's derivative of the inverse's explicit formula
+        Finv_T = ufl.inv(F).T
+        dF = ufl.derivative(F, u, self.u_trial)
+        geo = to_tensor(st.sigma) * (ufl.tr(Finv_T.T * dF) * Finv_T - Finv_T * dF.T * Finv_T)
+        Jac = ufl.inner(J * (geo + dsig * Finv_T), self.kin.grad3(v)) * w * dx
+        if terms is not None:
+            Jac = Jac + ufl.derivative(terms, u, self.u_trial)
         if st.F22 is not None:
             # the direction of a derivative must be free of unevaluated derivatives
             dF22 = expand_derivatives(st.F22 * (ufl.dot(st.G_tr, dsig_tr) + ufl.dot(st.G_rot, dsig_rot)))
