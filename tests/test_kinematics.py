@@ -158,3 +158,12 @@ def test_embeddings(unit_mesh):
         kin.Kinematics(kin.PLANE_STRESS, x).F3(u)
     with pytest.raises(ValueError, match="unknown model"):
         kin.Kinematics("3d", x)
+
+
+@pytest.mark.parametrize("F22", [1.0, 0.93, 1.2])
+def test_cofactor_is_J_F_inverse_transpose(unit_mesh, F22):
+    """kinematics.cofactor, the polynomial form of J F^-T of the 3x3 embedding (docs/theory.md
+    section 5.1), against det(F) inv(F)^T; F22 = 1 plane strain, else a thickness or hoop stretch."""
+    F = np.array([[1.1, 0.3, 0.0], [-0.2, 0.95, 0.0], [0.0, 0.0, F22]])
+    got = evaluate(kin.cofactor(_const(unit_mesh, F)), unit_mesh)
+    np.testing.assert_allclose(got, np.linalg.det(F) * np.linalg.inv(F).T, rtol=0, atol=1e-15)

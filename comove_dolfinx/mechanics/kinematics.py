@@ -96,6 +96,16 @@ class Kinematics:
         return ufl.Identity(3) + self.grad3(u)
 
 
+def cofactor(F) -> ufl.core.expr.Expr:
+    """J F^-T of the 3x3 embedding F = [[F00, F01, 0], [F10, F11, 0], [0, 0, F22]], written without
+    the inverse: [[F22 F11, -F22 F10, 0], [-F22 F01, F22 F00, 0], [0, 0, F00 F11 - F01 F10]], a
+    polynomial in F. The nominal stress is P = sigma cof F (docs/theory.md section 5.1), and its
+    derivative in F is a product rule, where UFL's derivative of J F^-T goes through the
+    inverse's explicit formula (divisions by det F, terms that cancel) in the generated code."""
+    a, b, c, d, e = F[0, 0], F[0, 1], F[1, 0], F[1, 1], F[2, 2]
+    return ufl.as_tensor([[e * d, -e * c, 0], [-e * b, e * a, 0], [0, 0, a * d - b * c]])
+
+
 # --------------------------------------------------------------------------------------------
 # Co-moving metric, base and Christoffel symbols
 # --------------------------------------------------------------------------------------------

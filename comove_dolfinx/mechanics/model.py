@@ -1,15 +1,17 @@
 """The finite-element model of a body and its items: spaces, state, residual and exact Jacobian.
 
 Equilibrium is written on the reference mesh (the co-moving coordinates) with the nominal stress
-P = J sigma F^-T (docs/theory.md sections 1 and 5), sigma from the stress update of updates.py and, for
+P = J sigma F^-T = sigma cof F (docs/theory.md sections 1 and 5; kinematics.cofactor, a polynomial in F),
+sigma from the stress update of updates.py and, for
 elastic-plastic materials, the return map at the quadrature points (materials.py, state.py):
 
     R(u; v) = int P : Grad3 v  w dX  + (the items' terms: loads, contact) = 0,
 
-w = 2 pi r (axisymmetry) or the thickness b. The Jacobian is exact: the geometric part comes from UFL
-differentiation of P at fixed sigma, the material part from UFL differentiation of the trial stress,
-mapped by the return map's derivative D = d sigma / d sigma_trial (identity for elastic materials,
-where UFL differentiates the update directly; applied from the stored stress and plastic strain in
+w = 2 pi r (axisymmetry) or the thickness b. The Jacobian is exact: the geometric part sigma d(cof F)
+at fixed sigma, the material part d sigma cof F from the update's derivative of the trial stress (in
+closed form for the S-R update, UFL's derivative for the others: StressUpdate.directional), mapped
+by the return map's derivative D = d sigma / d sigma_trial (identity for elastic materials;
+applied from the stored stress and plastic strain in
 plane strain and axisymmetry, stored by each evaluation in plane stress), and in plane-stress
 plasticity the part of the thickness stretch, dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot).
 A Taylor test checks it (taylor.py, tests/test_taylor.py).
@@ -32,7 +34,7 @@ from .. import compat
 from ..parallel import agree
 from .body import Body
 from . import return_maps_ufl as rm_ufl
-from .kinematics import PLANE_STRESS, Kinematics, to_tensor, to_vec
+from .kinematics import PLANE_STRESS, Kinematics, cofactor, to_tensor, to_vec
 from .quadrature import QuadratureRule
 from .state import FacetBase, InvertedElement, QuadratureState, ReturnMapFailure
 from .updates import make_update
@@ -154,9 +156,9 @@ class Model:
         F22 = st.F22 if st.F22 is not None else up.F22
         F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
         self.F = F
-        J = ufl.det(F)
+        cof = cofactor(F)                     # J F^-T
         w = self.kin.weight()
-        P = J * to_tensor(st.sigma) * ufl.inv(F).T
+        P = to_tensor(st.sigma) * cof
         internal = ufl.inner(P, self.kin.grad3(v)) * w * dx
         self._internal, self._internal_form, self._jit = internal, None, jit_options
         ctx = self.context()
@@ -182,12 +184,9 @@ class Model:
                 st.store_tangent()
                 Dx = ufl.dot(st.D, dsig_tr)
             dsig = to_tensor(Dx)
-        # the geometric part in closed form (sigma held): d(J F^-T) = J (tr(F^-1 dF) F^-T - F^-T dF^T F^-T),
-        # shorter in the generated code than UFL's derivative of the inverse's explicit formula
-        Finv_T = ufl.inv(F).T
-        dF = ufl.derivative(F, u, self.u_trial)
-        geo = to_tensor(st.sigma) * (ufl.tr(Finv_T.T * dF) * Finv_T - Finv_T * dF.T * Finv_T)
-        Jac = ufl.inner(J * (geo + dsig * Finv_T), self.kin.grad3(v)) * w * dx
+        # the geometric part (sigma held) is sigma d(cof F), the derivative of a polynomial in F
+        dcof = ufl.derivative(cof, u, self.u_trial)
+        Jac = ufl.inner(to_tensor(st.sigma) * dcof + dsig * cof, self.kin.grad3(v)) * w * dx
         if terms is not None:
             Jac = Jac + ufl.derivative(terms, u, self.u_trial)
         if st.F22 is not None:
@@ -282,7 +281,7 @@ class Model:
             if ezz is not None:
                 F22 = src.facet("F22_n") * ufl.exp(ezz)
         F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
-        PN = ufl.det(F) * sig * ufl.inv(F).T * ufl.as_vector([N[0], N[1], 0.0])
+        PN = sig * cofactor(F) * ufl.as_vector([N[0], N[1], 0.0])
         return ufl.as_vector([PN[0], PN[1]])
 
     # ----------------------------------------------------------------------------------------
