@@ -115,7 +115,7 @@ class SRUpdate(StressUpdate):
     def directional(self, u, u_n, state_n, du, up):
         """In closed form (docs/theory.md section 3.2): with G = d(dH) = dF F_n^-1, the angle's
         d theta = (G10 - G01) / (2 cos theta), d S = sym G + sin(theta) d theta diag(1, 1, 0) and
-        d sigma_rot = d theta (J sigma_rot - sigma_rot J), J the in-plane quarter turn."""
+        d sigma_rot = d theta (Z sigma_rot - sigma_rot Z), Z the in-plane quarter turn."""
         F, F_n = self.F(u), self.F(u_n)
         H = increment_gradient(F, F_n)
         G = ufl.derivative(F, u, du) * ufl.inv(F_n)
