@@ -180,6 +180,13 @@ def sr_decomposition(H):
     return S, R, c
 
 
+def in_plane_angle(H):
+    """(sin(theta), cos(theta)) of the S-R split's rotation of a gradient H of the 3x3 embedding:
+    w = (H10 - H01) / 2 and c = sqrt(1 - w^2) (NaN out of range, docs/theory.md section 2.3)."""
+    w = 0.5 * (H[1, 0] - H[0, 1])
+    return w, ufl.sqrt(1.0 - w * w)
+
+
 def sr_decomposition_in_plane(H):
     """:func:`sr_decomposition` of a gradient of the 3x3 embedding of a 2D model, whose rotation is
     about the out-of-plane axis (H02 = H12 = H20 = H21 = 0): the same split written with the one
@@ -192,8 +199,7 @@ def sr_decomposition_in_plane(H):
     of skew H as differences x - x that the generated code evaluates, with everything they multiply,
     in the stress evaluation and in the Jacobian (docs/performance.md); here every entry that is zero
     in the embedding is a literal zero. Returns (S, R, c)."""
-    w = 0.5 * (H[1, 0] - H[0, 1])
-    c = ufl.sqrt(1.0 - w * w)
+    w, c = in_plane_angle(H)
     k = w * w / (1.0 + c)
     shear = 0.5 * (H[0, 1] + H[1, 0])
     S = ufl.as_tensor([[H[0, 0] + k, shear, 0], [shear, H[1, 1] + k, 0], [0, 0, H[2, 2]]])

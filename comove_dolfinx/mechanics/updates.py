@@ -37,6 +37,7 @@ from .kinematics import (
     PLANE_STRESS,
     Kinematics,
     embed,
+    in_plane_angle,
     increment_gradient,
     polar_rotation_2d,
     sr_decomposition_in_plane,
@@ -119,8 +120,8 @@ class SRUpdate(StressUpdate):
         F, F_n = self.F(u), self.F(u_n)
         H = increment_gradient(F, F_n)
         G = ufl.derivative(F, u, du) * ufl.inv(F_n)
-        w = 0.5 * (H[1, 0] - H[0, 1])                 # sin(theta), as in sr_decomposition_in_plane
-        dtheta = 0.5 * (G[1, 0] - G[0, 1]) / ufl.sqrt(1.0 - w * w)
+        w, c = in_plane_angle(H)
+        dtheta = 0.5 * (G[1, 0] - G[0, 1]) / c
         shear = 0.5 * (G[0, 1] + G[1, 0])
         dS = ufl.as_tensor([[G[0, 0] + w * dtheta, shear, 0], [shear, G[1, 1] + w * dtheta, 0],
                             [0, 0, G[2, 2]]])
