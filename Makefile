@@ -27,18 +27,22 @@ ifeq ($(filter apt pip,$(SOURCE)),)
 $(error DOLFINX=$(DOLFINX): use apt, pip or auto)
 endif
 
-APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-pytest python3-venv \
+APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-pytest python3-pytest-xdist python3-venv \
             python3-pip python3-setuptools python3-wheel python3-tqdm python3-meshio python3-h5py \
             openmpi-bin libopenblas0 paraview python3-paraview xvfb xauth
 # the pip path compiles forms with the system's C compiler; PyPI's gmsh needs a few X/GL libraries
 PIP_APT_PKGS := gcc libc6-dev libglu1-mesa libxcursor1 libxft2 libxinerama1
-PIP_PKGS := "dolfinx-solver-real==0.11.*" gmsh matplotlib tqdm pytest meshio h5py
+PIP_PKGS := "dolfinx-solver-real==0.11.*" gmsh matplotlib tqdm pytest pytest-xdist meshio h5py
 # the first Python >= 3.12 among python3.13, python3.12, pyenv's versions and python3
 PIP_PYTHON ?= $(shell for p in python3.13 python3.12 \
     $$(ls -d $${PYENV_ROOT:-$$HOME/.pyenv}/versions/3.1[2-9]*/bin/python3 2>/dev/null | sort -rV) python3; do \
     $$p -c 'import sys; sys.exit(sys.version_info < (3, 12))' 2>/dev/null && { command -v $$p; break; }; done)
 
 NP      ?= 2
+# pytest-xdist workers for the serial suite: one per core, at most 4 (each holds a dolfinx and may
+# start a 2-rank run); JOBS=0 runs it in one process. Most of a cold run is the C compiler building
+# the generated forms, which the workers share through the JIT cache.
+JOBS    ?= $(shell n=$$(nproc 2>/dev/null || echo 1); [ $$n -gt 4 ] && n=4; echo $$n)
 # mpirun as root and with more ranks than cores (Open MPI 4 and 5); MPICH's mpiexec needs neither
 export OMPI_ALLOW_RUN_AS_ROOT := 1
 export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
@@ -102,7 +106,7 @@ demo: venv
 
 test: venv
 	@$(PY) -c "import comove_dolfinx, dolfinx; print('testing with dolfinx', dolfinx.__version__, '($(SOURCE))')"
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q -n $(JOBS) tests
 	$(MPIRUN) $(PY) -m pytest -q -p no:cacheprovider -m mpi tests
 
 # speed against accuracy, where methods break, what an iteration costs (docs/study.md, docs/stability.md,

@@ -1,11 +1,15 @@
-"""Shared fixtures: an MPI-safe temporary folder, garbage collection between tests, UFL evaluation."""
+"""Shared fixtures: an MPI-safe temporary folder, garbage collection between tests, UFL evaluation.
+
+MPI is imported in the fixtures, not here: with pytest-xdist (``make test`` runs the serial suite on
+two workers) this file is also loaded by the controlling process, which starts the workers; an MPI
+initialised there would leave its singleton's variables (OMPI_*, PMIX_*) in the workers' environment,
+and an ``mpirun`` started by a test (launch.py) would then take itself for part of that job and exit."""
 import gc
 import logging
 import os
 
 import numpy as np
 import pytest
-from mpi4py import MPI
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 logging.disable(logging.INFO)          # ffcx/cffi compile chatter
@@ -13,6 +17,7 @@ logging.disable(logging.INFO)          # ffcx/cffi compile chatter
 
 @pytest.fixture
 def comm():
+    from mpi4py import MPI
     return MPI.COMM_WORLD
 
 
@@ -33,6 +38,7 @@ def _collect(comm):
 def unit_mesh():
     """A two-triangle unit square: enough to evaluate expressions of constants or affine fields."""
     from dolfinx import mesh
+    from mpi4py import MPI
     return mesh.create_unit_square(MPI.COMM_SELF, 1, 1)
 
 
