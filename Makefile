@@ -27,9 +27,9 @@ ifeq ($(filter apt pip,$(SOURCE)),)
 $(error DOLFINX=$(DOLFINX): use apt, pip or auto)
 endif
 
-APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-pytest python3-pytest-xdist python3-venv \
-            python3-pip python3-setuptools python3-wheel python3-tqdm python3-meshio python3-h5py \
-            openmpi-bin libopenblas0 paraview python3-paraview xvfb xauth
+APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-pytest python3-pytest-xdist \
+            python3-venv python3-pip python3-setuptools python3-wheel python3-tqdm python3-meshio \
+            python3-h5py openmpi-bin libopenblas0 paraview python3-paraview xvfb xauth
 # the pip path compiles forms with the system's C compiler; PyPI's gmsh needs a few X/GL libraries
 PIP_APT_PKGS := gcc libc6-dev libglu1-mesa libxcursor1 libxft2 libxinerama1
 PIP_PKGS := "dolfinx-solver-real==0.11.*" gmsh matplotlib tqdm pytest pytest-xdist meshio h5py

@@ -1,7 +1,7 @@
 """Shared fixtures: an MPI-safe temporary folder, garbage collection between tests, UFL evaluation.
 
 MPI is imported in the fixtures, not here: with pytest-xdist (``make test`` runs the serial suite on
-two workers) this file is also loaded by the controlling process, which starts the workers; an MPI
+workers, one per core) this file is also loaded by the controlling process, which starts the workers; an MPI
 initialised there would leave its singleton's variables (OMPI_*, PMIX_*) in the workers' environment,
 and an ``mpirun`` started by a test (launch.py) would then take itself for part of that job and exit."""
 import gc
