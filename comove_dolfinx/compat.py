@@ -235,6 +235,22 @@ def constraint_gap(work: PETSc.Vec, bcs, x: PETSc.Vec) -> float:
     return work.norm(PETSc.NormType.NORM_INFINITY)
 
 
+def constrained(work: PETSc.Vec, bcs) -> np.ndarray:
+    """Whether each owned entry of ``work``'s layout is a dof of one of ``bcs`` (work overwritten):
+    the constraint rows set twice, against x = 1 and x = 2, differ by 1 there, whatever g is."""
+    rows = []
+    for value in (1.0, 2.0):
+        x = work.duplicate()
+        with x.localForm() as loc:
+            loc.set(value)
+        with work.localForm() as loc:
+            loc.set(0.0)
+        _set_bc(work, bcs, x, 1.0)
+        rows.append(work.array.copy())
+        x.destroy()
+    return rows[0] - rows[1] > 0.5
+
+
 def assemble_matrix(A: PETSc.Mat, a, bcs=()) -> None:
     """Zero A and assemble the bilinear form with the Dirichlet rows and columns of ``bcs``."""
     A.zeroEntries()

@@ -263,6 +263,7 @@ class Job:
                         step.start(self.items, model)          # done before the checkpoint: its
                         continue                               # releases (the restore sets the rest)
                     step.start(self.items, model)
+                    self._check_supports(run, model, k)
                     if step.release:
                         newton.factorised = False     # its tangent still holds the supports
                     solver = IncrementalSolver(model, step.settings(), newton)
@@ -330,6 +331,16 @@ class Job:
         res.process = {"wall_s": wall, "cpu_s": cpu, "compiler_cpu_s": compiler}
         res.timing_report = (f"{report.report()}\nprocess: wall {wall:.2f} s, CPU {cpu + compiler:.2f} s "
                              f"({compiler:.2f} s of it in the C compiler)")
+
+    def _check_supports(self, run: Run, model: Model, k: int) -> None:
+        """Warn (once) when a step starts with supports that leave a rigid-body motion free."""
+        free = model.free_motions()
+        if free and "supports" not in {w.split(":")[0] for w in run.warnings}:
+            when = f"from step {k + 1} " if len(self.steps) > 1 else ""
+            run.warnings.append(
+                f"supports: {when}the supports leave the body free to move rigidly ({', '.join(free)}); "
+                "only contact can hold it there, and until it does the tangent is singular and that "
+                "motion is left to round-off: add a support")
 
     #: a penetration beyond this fraction of the smallest cell is warned about
     PENETRATION_WARNING = 0.02

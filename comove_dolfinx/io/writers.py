@@ -134,16 +134,21 @@ class Console(Writer):
         self._print(run, f"{self.title}: {m.num_dofs()} dofs, {ncells} cells, {m.kin.model}, "
                          f"update {m.body.update}, {sum(s.n for s in run.job.steps)} increments nominal")
 
-    def write(self, run, row, inc) -> None:
+    def _warn(self, run) -> None:
+        """The warnings not printed yet."""
         for w in run.warnings[getattr(self, "_said", 0):]:
             self._print(run, f"warning: {w}")
         self._said = len(run.warnings)
+
+    def write(self, run, row, inc) -> None:
+        self._warn(run)
         extra = ", ".join(f"{k} {row[k]:.5g}" for k in self.columns)
         cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
         self._print(run, f"  step {row['step']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
                          f"{extra}  ({inc.wall_s:.2f} s)")
 
     def close(self, run, results) -> None:
+        self._warn(run)
         its = results.newton_its
         self._print(run, f"{self.title}: {results.message}; Newton iterations mean "
                          f"{(sum(its) / len(its)) if its else 0:.2f}, max {max(its) if its else 0}; "

@@ -231,6 +231,45 @@ class Model:
         """The Dirichlet conditions of the items as they stand (a step may release a support)."""
         return [bc for item in self.items for bc in item.bcs]
 
+    def free_motions(self) -> list[str]:
+        """The rigid-body motions that the Dirichlet conditions (as they stand) leave free, described
+        in words; empty when they hold the body. In the plane: the translations and the rotation
+        (the nullspace of the constrained dofs' rows of those three modes, the rotation scaled by the
+        body's size); in axisymmetry only the translation along the axis is rigid. Contact may hold
+        a free motion once it closes; until it does, the tangent is singular along it. Collective."""
+        n = self.V.dofmap.index_map.size_local
+        work = compat.create_vector(self.residual_form)
+        fixed = compat.constrained(work, self.bcs).reshape(n, 2)
+        work.destroy()
+        xy = self.V.tabulate_dof_coordinates()[:n, :2]
+        c = self.comm.allreduce(xy.sum(axis=0), op=MPI.SUM) / max(self.comm.allreduce(n, op=MPI.SUM), 1)
+        d = xy - c
+        size = np.sqrt(self.comm.allreduce(float((d ** 2).sum()), op=MPI.SUM)
+                       / max(self.comm.allreduce(n, op=MPI.SUM), 1)) or 1.0
+        # per dof: (translation x, translation y, rotation) components, on the constrained rows
+        modes = np.zeros((n, 2, 3))
+        modes[:, 0, 0] = modes[:, 1, 1] = 1.0
+        modes[:, 0, 2], modes[:, 1, 2] = -d[:, 1] / size, d[:, 0] / size
+        rows = modes[fixed]
+        G = self.comm.allreduce(rows.T @ rows, op=MPI.SUM)
+        if self.kin.axisymmetric:
+            return [] if G[1, 1] > 0.0 else ["translation along the axis"]
+        w, vecs = np.linalg.eigh(G)
+        free = vecs[:, w <= 1e-10 * max(w.max(), 1.0)]
+        if free.shape[1] == 3:
+            return ["translation in x", "translation in y", "rotation"]
+        out = []
+        for k in range(free.shape[1]):
+            tx, ty, rot = free[:, k] / np.abs(free[:, k]).max()
+            if abs(rot) < 1e-8:
+                t = np.array([tx, ty]) / np.hypot(tx, ty)
+                out.append("translation in " + ("x" if abs(t[1]) < 1e-8 else "y" if abs(t[0]) < 1e-8
+                                                else f"direction ({t[0]:.3g}, {t[1]:.3g})"))
+            else:                                     # t + rot e_z x (x - c) = rot e_z x (x - p)
+                p = c + size * np.array([-ty, tx]) / rot
+                out.append(f"rotation about ({p[0]:.4g}, {p[1]:.4g})")
+        return out
+
     def release(self, item) -> None:
         """Take a support away (loads.Displacement.release): its force at the converged state,
         the residual at its dofs, becomes a nodal force that the step ramps down."""
