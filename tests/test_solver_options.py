@@ -1,7 +1,7 @@
 """The linear solver through PETSc options under the prefix comove_ (solver/linear.py): another direct
 solver gives MUMPS's solution to round-off, GMRES with algebraic multigrid (and the rigid-body
 near-nullspace) agrees to its tolerance, and options PETSc cannot use end the run with a message
-that names them, on every rank, instead of a hang."""
+that names them, on every rank, instead of a hang; a failed MUMPS factorisation gives MUMPS's code."""
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -103,3 +103,17 @@ def test_bad_factorisation_option_stops_the_run_with_its_message():
     assert all(m == messages[0] for m in messages)
     from petsc4py import PETSc
     assert not PETSc.Options().hasName(PREFIX + "mat_mumps_icntl_7")
+
+
+@pytest.mark.mpi
+def test_a_failed_mumps_factorisation_says_why():
+    """MUMPS's memory limit set to 1 MB (ICNTL(23) = 1), below what the plate's factors need, fails
+    the factorisation with MUMPS's error -19 on any number of ranks: the run stops on every rank
+    with a message that gives MUMPS's code and the option that cures it (solver/linear.py,
+    MUMPS_HINTS)."""
+    model, solver, res = _plate({"mat_mumps_icntl_23": 1}, max_cutbacks=1)
+    assert not res.completed and not res.increments
+    assert "KSP reason -11; MUMPS INFOG(1) = -19" in res.message, res.message
+    assert "-comove_mat_mumps_icntl_23 is too low" in res.message, res.message
+    messages = MPI.COMM_WORLD.allgather(res.message)
+    assert all(m == messages[0] for m in messages)

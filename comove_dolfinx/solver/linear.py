@@ -76,6 +76,34 @@ def make_ksp(comm, A: PETSc.Mat, options: dict) -> PETSc.KSP:
     return ksp
 
 
+#: what MUMPS's commonest error codes (INFOG(1), its user guide's section 8) ask of the user
+MUMPS_HINTS = {
+    -8: "its workspace was too small: raise -comove_mat_mumps_icntl_14 (per cent, default 20)",
+    -9: "its workspace was too small: raise -comove_mat_mumps_icntl_14 (per cent, default 20)",
+    -10: "the tangent is numerically singular (a rigid-body motion that no support or contact holds?)",
+    -13: "it could not allocate its memory",
+    -19: "its memory limit -comove_mat_mumps_icntl_23 is too low",
+    -38: "a parallel analysis (-comove_mat_mumps_icntl_28 2) that this MUMPS was built without: drop it",
+}
+
+
+def factor_error(ksp: PETSc.KSP) -> str:
+    """MUMPS's own account of a failed factorisation, "MUMPS INFOG(1) = code, INFOG(2) = detail" and
+    what the code asks for, or "" (another solver, no error, or a petsc4py without the call)."""
+    pc = ksp.getPC()
+    try:
+        if pc.getType() not in ("lu", "cholesky") or pc.getFactorSolverType() != "mumps":
+            return ""
+        F = pc.getFactorMatrix()
+        code, detail = F.getMumpsInfog(1), F.getMumpsInfog(2)
+    except (AttributeError, PETSc.Error):
+        return ""
+    if code >= 0:
+        return ""
+    hint = MUMPS_HINTS.get(code)
+    return f"MUMPS INFOG(1) = {code}, INFOG(2) = {detail}" + (f": {hint}" if hint else "")
+
+
 def is_direct(ksp: PETSc.KSP) -> bool:
     """A factorisation applied once (preonly with LU or Cholesky)."""
     return ksp.getType() == "preonly" and ksp.getPC().getType() in ("lu", "cholesky")

@@ -178,7 +178,8 @@ class Newton(LineSearches):
         if failure is None:
             reason = self.ksp.getConvergedReason()
             if reason < 0:
-                failure = f"the linear solver failed (PETSc KSP reason {reason})"
+                why = linear.factor_error(self.ksp)
+                failure = f"the linear solver failed (PETSc KSP reason {reason}{'; ' + why if why else ''})"
         if failure is None:
             x.x.scatter_forward()
         return failure
