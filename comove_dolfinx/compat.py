@@ -238,16 +238,13 @@ def constraint_gap(work: PETSc.Vec, bcs, x: PETSc.Vec) -> float:
 def constrained(work: PETSc.Vec, bcs) -> np.ndarray:
     """Whether each owned entry of ``work``'s layout is a dof of one of ``bcs`` (work overwritten):
     the constraint rows set twice, against x = 1 and x = 2, differ by 1 there, whatever g is."""
-    rows = []
+    x, rows = work.duplicate(), []
     for value in (1.0, 2.0):
-        x = work.duplicate()
-        with x.localForm() as loc:
-            loc.set(value)
-        with work.localForm() as loc:
-            loc.set(0.0)
+        x.set(value)
+        work.set(0.0)
         _set_bc(work, bcs, x, 1.0)
         rows.append(work.array.copy())
-        x.destroy()
+    x.destroy()
     return rows[0] - rows[1] > 0.5
 
 

@@ -42,7 +42,7 @@ def test_a_roller_along_its_edge_leaves_the_rotations_about_its_line():
     another point of it)."""
     import comove_dolfinx as cm
     free = _model([cm.Fixed("bottom", component=0)]).free_motions()
-    assert len(free) == 2
+    assert len(free) == 2 and free.count("translation in y") <= 1      # two independent motions
     for motion in free:
         if motion.startswith("rotation about"):
             px, py = map(float, re.findall(r"[-+0-9.e]+", motion.split("about")[1]))

@@ -39,7 +39,7 @@ from .quadrature import QuadratureRule
 from .state import FacetBase, InvertedElement, QuadratureState, ReturnMapFailure
 from .updates import make_update
 
-__all__ = ["Context", "InvertedElement", "Model", "ReturnMapFailure"]
+__all__ = ["Context", "InvertedElement", "Model", "ReturnMapFailure", "rigid_motions"]
 
 
 class ElasticConstants:
@@ -85,6 +85,24 @@ class Context:
     @property
     def weight(self):
         return self.kin.weight()
+
+
+def rigid_motions(V) -> tuple[np.ndarray, np.ndarray, float]:
+    """The two translations and the in-plane rotation of the 2-D displacement space V at this
+    rank's owned nodes, (nodes, component, motion); the rotation is about the centroid c of all the
+    nodes and divided by their rms distance ``size`` from it, so that the three are of one
+    magnitude. Returns (modes, c, size). Collective."""
+    n = V.dofmap.index_map.size_local
+    xy = V.tabulate_dof_coordinates()[:n, :2]
+    comm = V.mesh.comm
+    total = max(comm.allreduce(n, op=MPI.SUM), 1)
+    c = comm.allreduce(xy.sum(axis=0), op=MPI.SUM) / total
+    d = xy - c
+    size = float(np.sqrt(comm.allreduce(float((d ** 2).sum()), op=MPI.SUM) / total)) or 1.0
+    modes = np.zeros((n, 2, 3))
+    modes[:, 0, 0] = modes[:, 1, 1] = 1.0
+    modes[:, 0, 2], modes[:, 1, 2] = -d[:, 1] / size, d[:, 0] / size
+    return modes, c, size
 
 
 class Model:
@@ -234,23 +252,13 @@ class Model:
     def free_motions(self) -> list[str]:
         """The rigid-body motions that the Dirichlet conditions (as they stand) leave free, described
         in words; empty when they hold the body. In the plane: the translations and the rotation
-        (the nullspace of the constrained dofs' rows of those three modes, the rotation scaled by the
-        body's size); in axisymmetry only the translation along the axis is rigid. Contact may hold
-        a free motion once it closes; until it does, the tangent is singular along it. Collective."""
-        n = self.V.dofmap.index_map.size_local
+        (the nullspace of the constrained dofs' rows of the three modes of :func:`rigid_motions`); in
+        axisymmetry only the translation along the axis is rigid. Contact may hold a free motion
+        once it closes; until it does, the tangent is singular along it. Collective."""
+        modes, c, size = rigid_motions(self.V)
         work = compat.create_vector(self.residual_form)
-        fixed = compat.constrained(work, self.bcs).reshape(n, 2)
+        rows = modes[compat.constrained(work, self.bcs).reshape(-1, 2)]
         work.destroy()
-        xy = self.V.tabulate_dof_coordinates()[:n, :2]
-        c = self.comm.allreduce(xy.sum(axis=0), op=MPI.SUM) / max(self.comm.allreduce(n, op=MPI.SUM), 1)
-        d = xy - c
-        size = np.sqrt(self.comm.allreduce(float((d ** 2).sum()), op=MPI.SUM)
-                       / max(self.comm.allreduce(n, op=MPI.SUM), 1)) or 1.0
-        # per dof: (translation x, translation y, rotation) components, on the constrained rows
-        modes = np.zeros((n, 2, 3))
-        modes[:, 0, 0] = modes[:, 1, 1] = 1.0
-        modes[:, 0, 2], modes[:, 1, 2] = -d[:, 1] / size, d[:, 0] / size
-        rows = modes[fixed]
         G = self.comm.allreduce(rows.T @ rows, op=MPI.SUM)
         if self.kin.axisymmetric:
             return [] if G[1, 1] > 0.0 else ["translation along the axis"]
@@ -259,13 +267,12 @@ class Model:
         if free.shape[1] == 3:
             return ["translation in x", "translation in y", "rotation"]
         out = []
-        for k in range(free.shape[1]):
-            tx, ty, rot = free[:, k] / np.abs(free[:, k]).max()
+        for tx, ty, rot in (f / np.abs(f).max() for f in free.T):
             if abs(rot) < 1e-8:
                 t = np.array([tx, ty]) / np.hypot(tx, ty)
                 out.append("translation in " + ("x" if abs(t[1]) < 1e-8 else "y" if abs(t[0]) < 1e-8
                                                 else f"direction ({t[0]:.3g}, {t[1]:.3g})"))
-            else:                                     # t + rot e_z x (x - c) = rot e_z x (x - p)
+            else:                                     # t + rot e_z x (x - c) / size = rot e_z x (x - p) / size
                 p = c + size * np.array([-ty, tx]) / rot
                 out.append(f"rotation about ({p[0]:.4g}, {p[1]:.4g})")
         return out

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-import numpy as np
-from mpi4py import MPI
 from petsc4py import PETSc
+
+from ..mechanics.model import rigid_motions
 
 PREFIX = "comove_"
 DEFAULTS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
@@ -77,9 +77,10 @@ def make_ksp(comm, A: PETSc.Mat, options: dict) -> PETSc.KSP:
 
 
 #: what MUMPS's commonest error codes (INFOG(1), its user guide's section 8) ask of the user
+_WORKSPACE = "its workspace was too small: raise -comove_mat_mumps_icntl_14 (per cent, default 20)"
 MUMPS_HINTS = {
-    -8: "its workspace was too small: raise -comove_mat_mumps_icntl_14 (per cent, default 20)",
-    -9: "its workspace was too small: raise -comove_mat_mumps_icntl_14 (per cent, default 20)",
+    -8: _WORKSPACE,
+    -9: _WORKSPACE,
     -10: "the tangent is numerically singular (a rigid-body motion that no support or contact holds?)",
     -13: "it could not allocate its memory",
     -19: "its memory limit -comove_mat_mumps_icntl_23 is too low",
@@ -111,16 +112,13 @@ def is_direct(ksp: PETSc.KSP) -> bool:
 
 def rigid_body_modes(V, A: PETSc.Mat) -> PETSc.NullSpace:
     """The two translations and the in-plane rotation of the 2-D displacement space V (blocked,
-    2 components per node), orthonormalised, as a PETSc null space on A's layout."""
-    n = V.dofmap.index_map.size_local
-    xy = V.tabulate_dof_coordinates()[:n, :2]
-    comm = V.mesh.comm                          # the rotation about the centroid (better conditioned)
-    xy = xy - comm.allreduce(xy.sum(axis=0), op=MPI.SUM) / max(comm.allreduce(n, op=MPI.SUM), 1)
+    2 components per node; the rotation about the centroid, better conditioned), orthonormalised,
+    as a PETSc null space on A's layout."""
+    values = rigid_motions(V)[0]
     modes = []
-    for values in (np.c_[np.ones(n), np.zeros(n)], np.c_[np.zeros(n), np.ones(n)],
-                   np.c_[-xy[:, 1], xy[:, 0]]):
+    for k in range(3):
         vec = A.createVecRight()
-        vec.array[:] = values.ravel()
+        vec.array[:] = values[:, :, k].ravel()
         modes.append(vec)
     for k, vec in enumerate(modes):             # Gram-Schmidt (collective dots and norms)
         for prev in modes[:k]:
