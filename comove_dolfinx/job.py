@@ -313,6 +313,7 @@ class Job:
             res.wall_s = time.perf_counter() - t_start
             self._account(res, timer, before)
             res.contact = stats if contacts else {}
+            self._check_workspace(run)             # also when no increment converged
             res.warnings = list(run.warnings)
             for w in self.writers:
                 collective(comm, w.close, run, res)
@@ -342,12 +343,25 @@ class Job:
                 "only contact can hold it there, and until it does the tangent is singular and that "
                 "motion is left to round-off: add a support")
 
+    @staticmethod
+    def _check_workspace(run: Run) -> None:
+        """Warn (once) when MUMPS ran out of workspace and the solver gave it more (solver/linear.py,
+        grow_workspace): each time costs a new analysis and factorisation."""
+        grown = getattr(run.newton, "workspace", None)
+        if grown is not None and "linear solver" not in {w.split(":")[0] for w in run.warnings}:
+            run.warnings.append(
+                f"linear solver: MUMPS's workspace was too small for a tangent and was raised to {grown} % "
+                "over its estimate, each time with a new analysis and factorisation: start with "
+                f"-comove_mat_mumps_icntl_14 {grown} (the solver's PETSc options, docs/performance.md)")
+
     #: a penetration beyond this fraction of the smallest cell is warned about
     PENETRATION_WARNING = 0.02
 
     def _guards(self, run: Run, row: dict, contacts, stats) -> None:
         """Warn (once each) of a plastic strain beyond the hardening table and of a penetration that
-        is a sizeable part of an element: results that are computed but should not be trusted."""
+        is a sizeable part of an element: results that are computed but should not be trusted; and
+        of a linear solver that had to be given more workspace (the run repeats factorisations)."""
+        self._check_workspace(run)
         m, said = run.model, {w.split(":")[0] for w in run.warnings}
         if m.plastic is not None and "plastic strain" not in said:
             last = m.plastic.hardening.strain[-1]

@@ -1,7 +1,9 @@
 """The linear solver through PETSc options under the prefix comove_ (solver/linear.py): another direct
 solver gives MUMPS's solution to round-off, GMRES with algebraic multigrid (and the rigid-body
 near-nullspace) agrees to its tolerance, and options PETSc cannot use end the run with a message
-that names them, on every rank, instead of a hang; a failed MUMPS factorisation gives MUMPS's code."""
+that names them, on every rank, instead of a hang; a failed MUMPS factorisation gives MUMPS's code,
+is done again with more workspace when that is what it lacked, and stops the run at once when no
+smaller increment can cure it."""
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -105,15 +107,127 @@ def test_bad_factorisation_option_stops_the_run_with_its_message():
     assert not PETSc.Options().hasName(PREFIX + "mat_mumps_icntl_7")
 
 
+class _Attempts:
+    """A Newton monitor counting the solves (increment attempts) that end."""
+
+    def __init__(self):
+        self.solves = 0
+
+    def solved(self, newton, ok, its, reason):
+        self.solves += 1
+
+
 @pytest.mark.mpi
-def test_a_failed_mumps_factorisation_says_why():
+def test_a_failed_mumps_factorisation_says_why_and_stops_at_once():
     """MUMPS's memory limit set to 1 MB (ICNTL(23) = 1), below what the plate's factors need, fails
     the factorisation with MUMPS's error -19 on any number of ranks: the run stops on every rank
     with a message that gives MUMPS's code and the option that cures it (solver/linear.py,
-    MUMPS_HINTS)."""
-    model, solver, res = _plate({"mat_mumps_icntl_23": 1}, max_cutbacks=1)
+    MUMPS_HINTS), after one attempt: a smaller increment needs the same memory, so the six
+    cut-backs allowed are not spent."""
+    attempts = _Attempts()
+    scene = get_scene("plate", ["size=0.3"])
+    body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
+    model = Model(body, items)
+    model.finalize()
+    solver = IncrementalSolver(model, StepSettings(n_steps=2, t_end=0.2, max_cutbacks=6),
+                               NewtonSettings(petsc_options={"mat_mumps_icntl_23": 1},
+                                              monitor=attempts))
+    res = solver.run()
     assert not res.completed and not res.increments
     assert "KSP reason -11; MUMPS INFOG(1) = -19" in res.message, res.message
     assert "-comove_mat_mumps_icntl_23 is too low" in res.message, res.message
+    assert "no smaller increment cures" in res.message, res.message
+    assert attempts.solves == 1
     messages = MPI.COMM_WORLD.allgather(res.message)
     assert all(m == messages[0] for m in messages)
+
+
+def _saddle_point(comm, m=24, seed=2):
+    """The matrix [[K, B^T], [B, 0]] of a constrained Laplacian: K the 5-point Laplacian on an m x m
+    grid, B m^2/3 random constraints of three unknowns each; the zero block admits no diagonal
+    pivot, so MUMPS must delay pivots beyond its analysis's estimate (no extra workspace: -9).
+    Rows split over the ranks in contiguous blocks; the same matrix on any number of ranks."""
+    from petsc4py import PETSc
+    n, k = m * m, (m * m) // 3
+    rng = np.random.default_rng(seed)
+    cons = [(rng.choice(n, 3, replace=False), rng.standard_normal(3)) for _ in range(k)]
+    A = PETSc.Mat().createAIJ([n + k, n + k], comm=comm, nnz=(12, 12))
+    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+    lo, hi = A.getOwnershipRange()
+    for i in range(lo, hi):
+        if i < n:
+            cols = [i] + [j for j in (i - 1, i + 1, i - m, i + m) if 0 <= j < n]
+            vals = [4.0] + [-1.0] * (len(cols) - 1)
+            for r, (c, v) in enumerate(cons):             # the columns of B^T in row i
+                for cc, vv in zip(c, v):
+                    if cc == i:
+                        cols.append(n + r)
+                        vals.append(vv)
+        else:
+            c, v = cons[i - n]
+            cols, vals = list(c), list(v)
+        A.setValues(i, np.asarray(cols, dtype=PETSc.IntType), np.asarray(vals), addv=True)
+    A.assemble()
+    return A
+
+
+@pytest.mark.mpi
+def test_mumps_out_of_workspace_factorises_again_with_more():
+    """A saddle-point matrix with MUMPS's workspace at 0 % over its estimate: a plain solve fails with
+    INFOG(1) = -9 (delayed pivots); linear.solve raises ICNTL(14) and factorises again, and its
+    solution satisfies A x = b to round-off, on one or two ranks alike."""
+    from petsc4py import PETSc
+
+    from comove_dolfinx.solver import linear
+    comm = MPI.COMM_WORLD
+    A = _saddle_point(comm)
+    b = A.createVecLeft()
+    b.set(1.0)
+    x = b.duplicate()
+    plain = linear.make_ksp(comm, A, {"mat_mumps_icntl_14": 0})
+    with linear.pushed({"mat_mumps_icntl_14": 0}):
+        plain.solve(b, x)
+    assert plain.getConvergedReason() < 0
+    assert linear.mumps_code(plain) == -9
+    assert "its workspace was too small at 0 %" in linear.factor_error(plain)
+
+    options = {"mat_mumps_icntl_14": 0}
+    ksp = linear.make_ksp(comm, A, options)
+    failure, grown = linear.solve(ksp, options, b, x, comm)
+    assert failure is None and ksp.getConvergedReason() > 0
+    assert grown and grown == sorted(grown) and grown[0] == 20
+    assert options["mat_mumps_icntl_14"] == grown[-1]
+    assert ksp.getPC().getFactorMatrix().getMumpsIcntl(14) == grown[-1]
+    r = b.duplicate()
+    A.mult(x, r)
+    r.axpy(-1.0, b)
+    assert r.norm() <= 1e-10 * b.norm()
+    assert not PETSc.Options().hasName(linear.PREFIX + "mat_mumps_icntl_14")
+    for obj in (plain, ksp, A, b, x, r):
+        obj.destroy()
+
+
+@pytest.mark.mpi
+def test_a_job_warns_once_when_mumps_needed_more_workspace(capsys):
+    """The ring crushed in ten increments with MUMPS held to strict pivoting (a pivot must be the
+    largest of its column, no permutation or scaling to help) and no spare workspace: a far-from-
+    equilibrium iterate delays pivots beyond the analysis's estimate (-9). The solver factorises
+    again with more, and the job says so once, on every rank alike, whether or not the run gets
+    through (these increments are too large: it stops)."""
+    import comove_dolfinx as cm
+    from comove_dolfinx.io.writers import Console
+
+    scene = get_scene("ring", [])
+    body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
+    strict = {"mat_mumps_icntl_14": 0, "mat_mumps_cntl_1": 1.0, "mat_mumps_icntl_6": 0,
+              "mat_mumps_icntl_8": 0}
+    job = cm.Job(body, items, [cm.Step(10, max_cutbacks=1)], writers=[Console("ring")],
+                 newton=NewtonSettings(petsc_options=strict))
+    res = job.run()
+    said = [w for w in res.warnings if w.startswith("linear solver:")]
+    assert len(said) == 1, res.warnings
+    assert "raised to 20 %" in said[0] and "-comove_mat_mumps_icntl_14 20" in said[0]
+    assert MPI.COMM_WORLD.allgather(said) == [said] * MPI.COMM_WORLD.size
+    out = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert out.count("warning: linear solver:") == 1

@@ -13,7 +13,8 @@ An iterate that stays inadmissible, ``max_it`` iterations, or a residual that gr
 ``divergence`` over the increment's first fails the increment; the loop then restores the last
 converged state and halves the increment, down to the smallest increment dt_nom / 2^max_cutbacks;
 when an increment of that size fails, the run stops cleanly (every converged increment has already
-been handed out). The floor is absolute, not a count of failures in a row: near a limit load, where
+been handed out). A linear solver that fails for want of memory or of a feature of its build
+(newton.py, ``hopeless``) stops the run at once: halving would fail the same way. The floor is absolute, not a count of failures in a row: near a limit load, where
 increments converge only when small and fail again once grown, a count would creep towards the limit
 for ever. After ``grow_after`` easy increments (at most ``easy_its`` iterations) the increment
 doubles again, never beyond its nominal size, so the run comes back onto the nominal load levels.
@@ -226,6 +227,11 @@ class IncrementalSolver:
                 cut += 1
                 failed_its += its
                 log.info("  increment to t = %.6g failed (%s)", t_try, reason)
+                if self.newton.hopeless:          # the linear solver's memory or build: no
+                    m.set_load(t)                 # smaller increment helps
+                    result.message = (f"stopped at load factor {t:.6g}: an increment failed in a way "
+                                      f"no smaller increment cures: {reason}")
+                    return
                 if dt <= dt_min * (1.0 + 1e-9):
                     m.set_load(t)
                     result.message = (f"stopped at load factor {t:.6g}: an increment of the "

@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from petsc4py import PETSc
 
 from ..mechanics.model import rigid_motions
+from ..parallel import first_failure
 
 PREFIX = "comove_"
 DEFAULTS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
@@ -76,8 +77,13 @@ def make_ksp(comm, A: PETSc.Mat, options: dict) -> PETSc.KSP:
     return ksp
 
 
+#: the largest workspace the solver raises ICNTL(14) to on its own (per cent over the analysis's
+#: estimate; MUMPS's default is 20)
+MAX_WORKSPACE = 640
 #: what MUMPS's commonest error codes (INFOG(1), its user guide's section 8) ask of the user
-_WORKSPACE = "its workspace was too small: raise -comove_mat_mumps_icntl_14 (per cent, default 20)"
+_WORKSPACE = ("its workspace was too small at {icntl_14} % over its estimate, the most the solver "
+              "raises it to on its own (many delayed pivots: a nearly singular tangent?): raise "
+              "-comove_mat_mumps_icntl_14 further")
 MUMPS_HINTS = {
     -8: _WORKSPACE,
     -9: _WORKSPACE,
@@ -88,20 +94,76 @@ MUMPS_HINTS = {
 }
 
 
-def factor_error(ksp: PETSc.KSP) -> str:
-    """MUMPS's own account of a failed factorisation, "MUMPS INFOG(1) = code, INFOG(2) = detail" and
-    what the code asks for, or "" (another solver, no error, or a petsc4py without the call)."""
+#: the MUMPS codes a factorisation with a larger workspace (ICNTL(14), per cent over its estimate)
+#: cures: delayed pivots outgrew the estimate of the analysis
+WORKSPACE_CODES = (-8, -9)
+#: the codes no smaller increment cures: the machine's memory, the user's memory limit, the build
+HOPELESS_CODES = (-13, -19, -38)
+
+
+def mumps_code(ksp: PETSc.KSP) -> int:
+    """MUMPS's INFOG(1) after the KSP's last factorisation (the same on every rank), or 0 (another
+    solver, no error, or a petsc4py without the call)."""
     pc = ksp.getPC()
     try:
         if pc.getType() not in ("lu", "cholesky") or pc.getFactorSolverType() != "mumps":
-            return ""
-        F = pc.getFactorMatrix()
-        code, detail = F.getMumpsInfog(1), F.getMumpsInfog(2)
+            return 0
+        return int(pc.getFactorMatrix().getMumpsInfog(1))
     except (AttributeError, PETSc.Error):
-        return ""
+        return 0
+
+
+def grow_workspace(ksp: PETSc.KSP, options: dict) -> int | None:
+    """After MUMPS ran out of workspace (INFOG(1) = -8 or -9): ICNTL(14) doubled (to at least 20 %,
+    at most :data:`MAX_WORKSPACE`) in ``options`` (the settings' options, keys without the prefix,
+    pushed at every solve) and the factorisation dropped, so that the next solve analyses and
+    factorises again with it (collective: INFOG is global, so every rank takes the same branch).
+    Returns the new percentage, or None (another failure, or the workspace is at its largest)."""
+    if mumps_code(ksp) not in WORKSPACE_CODES:
+        return None
+    pc = ksp.getPC()
+    now = int(pc.getFactorMatrix().getMumpsIcntl(14))
+    if now >= MAX_WORKSPACE:
+        return None
+    new = min(max(2 * now, 20), MAX_WORKSPACE)
+    options["mat_mumps_icntl_14"] = new
+    A, P = ksp.getOperators()
+    pc.reset()                         # the factor goes; the operators must be set again
+    ksp.setOperators(A, P)
+    return new
+
+
+def solve(ksp: PETSc.KSP, options: dict, rhs: PETSc.Vec, x: PETSc.Vec, comm) -> tuple[str | None, list]:
+    """``ksp.solve(rhs, x)`` with ``options`` pushed; when MUMPS runs out of workspace, again with
+    more (:func:`grow_workspace`) until it factorises or the workspace is at its largest. Returns
+    (None, or PETSc's error if any rank raised one: the same on every rank; the workspaces raised
+    to, per cent). A negative KSP reason without an error is the caller's to read."""
+    grown = []
+    while True:
+        err = None
+        try:
+            with pushed(options):
+                ksp.solve(rhs, x)
+        except PETSc.Error as e:
+            err = e
+        failure = first_failure(comm, err)
+        if failure is not None or ksp.getConvergedReason() >= 0:
+            return failure, grown
+        pct = grow_workspace(ksp, options)
+        if pct is None:
+            return None, grown
+        grown.append(pct)
+
+
+def factor_error(ksp: PETSc.KSP) -> str:
+    """MUMPS's own account of a failed factorisation, "MUMPS INFOG(1) = code, INFOG(2) = detail" and
+    what the code asks for, or "" (another solver, no error, or a petsc4py without the call)."""
+    code = mumps_code(ksp)
     if code >= 0:
         return ""
-    hint = MUMPS_HINTS.get(code)
+    F = ksp.getPC().getFactorMatrix()
+    detail = F.getMumpsInfog(2)
+    hint = MUMPS_HINTS.get(code, "").format(icntl_14=F.getMumpsIcntl(14))
     return f"MUMPS INFOG(1) = {code}, INFOG(2) = {detail}" + (f": {hint}" if hint else "")
 
 

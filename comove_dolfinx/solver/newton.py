@@ -46,7 +46,6 @@ from petsc4py import PETSc
 
 from .. import compat
 from ..mechanics.model import InvertedElement, Model, ReturnMapFailure
-from ..parallel import first_failure
 from . import linear
 from .linesearch import LineSearches
 
@@ -137,6 +136,9 @@ class Newton(LineSearches):
         self._w = self.b.duplicate()          # scratch: the constraint gap g - u
         self._last_trial = None               # (alpha, ||R||) of the line search's last trial
         self.factorised = False            # the KSP holds the LU factors of a tangent
+        self.workspace = None              # ICNTL(14) (per cent) once MUMPS's workspace was raised
+        self.hopeless = False              # the last linear solve failed in a way that no smaller
+                                           # increment cures (linear.HOPELESS_CODES)
         self.residual_scale = 0.0
         self.history: list[tuple[float, float]] = []
         self.poll = None                   # called by every rank before each iteration (a job's
@@ -167,19 +169,21 @@ class Newton(LineSearches):
     def _solve(self, rhs: PETSc.Vec, x) -> str | None:
         """Solve K x = rhs with the KSP's operator into the Function x; None, or why it failed (the
         same on every rank: an error raised on one rank's part of the solve becomes every rank's
-        failure)."""
-        err = None
-        try:
-            with linear.pushed(self.petsc_options):
-                self.ksp.solve(rhs, compat.petsc_vec(x))
-        except PETSc.Error as e:
-            err = e
-        failure = first_failure(self.model.comm, err)
+        failure). A MUMPS factorisation that ran out of workspace is done again with more
+        (linear.grow_workspace), which then stays for the run (``workspace``)."""
+        failure, grown = linear.solve(self.ksp, self.petsc_options, rhs, compat.petsc_vec(x),
+                                      self.model.comm)
+        for pct in grown:                     # MUMPS ran out of workspace and was given more
+            log.info("    MUMPS's workspace was too small: ICNTL(14) raised to %d %%", pct)
+        if grown:
+            self.workspace = grown[-1]
+        self.hopeless = False
         if failure is None:
             reason = self.ksp.getConvergedReason()
             if reason < 0:
                 why = linear.factor_error(self.ksp)
                 failure = f"the linear solver failed (PETSc KSP reason {reason}{'; ' + why if why else ''})"
+                self.hopeless = linear.mumps_code(self.ksp) in linear.HOPELESS_CODES
         if failure is None:
             x.x.scatter_forward()
         return failure
@@ -217,6 +221,7 @@ class Newton(LineSearches):
     def solve(self) -> tuple[bool, int, str]:
         """Iterate from the current ``model.u``; returns (converged, iterations, reason), also to
         the settings' monitor."""
+        self.hopeless = False
         ok, its, reason = self._iterate()
         self._notify("solved", ok, its, reason)
         return ok, its, reason
