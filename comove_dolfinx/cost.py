@@ -5,6 +5,7 @@ files and charts, never asserts (docs/performance.md).
     python -m comove_dolfinx.cost solvers --out results/cost   # ring: direct solvers, orderings, GAMG
     mpirun -n 2 python -m comove_dolfinx.cost scale --out results/cost   # ring, plate: 1 or 2 ranks
     python -m comove_dolfinx.cost slopes  --out results/cost   # ring: the residual along du
+    python -m comove_dolfinx.cost parts   --out results/cost   # ring: each part, alone and in the loop
 
 floor: per ring size, the CPU time of one Newton iteration of the real run (the scene's first
 ``--increments`` nominal increments, predictor, line searches, cut-backs and failed iterations
@@ -25,6 +26,12 @@ at steps a from 1e-5 to 1, and its internal force's part: 1 as a -> 0 for an exa
 stays near 1 where the residual is smooth along du; with the quadrature points that yield at the
 iterate and unload at the step, and those that start to yield there. The run goes on as without
 the probe.
+
+parts: the residual and its stress evaluation, the Jacobian and the floor's matrix and residual,
+and two calls that do nearly nothing (a NumPy sum of 16 values, a PETSc vector norm), at the ring's
+state after ``--increments`` (6) increments, each timed back to back, right after a factorisation
+and solve of the tangent (where a Newton iteration meets them) and after 4 ms of the interpreter
+alone: what a part costs in the loop beyond its own work (wall time, one rank).
 
 CPU time is ``time.process_time`` (the process's, not the machine's); every figure is the median of
 ``--repeats`` runs with its spread (max - min) beside it. Other processes on the machine lengthen
@@ -48,6 +55,7 @@ from . import compat
 from .mechanics.model import Model
 from .presets import SceneError, get_scene
 from .solver import IncrementalSolver, Timer
+from .solver import linear
 from .solver.linear import make_ksp, pushed
 from .solver.newton import Newton
 from .tables import read_table, write_table
@@ -500,11 +508,103 @@ def slopes(out: pathlib.Path, sizes=(0.058,), increments: int = 36, count: int =
     return rows
 
 
+def _idle(seconds: float) -> None:
+    """The interpreter alone for ``seconds`` (a loop on the clock: no system call, no other code)."""
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
+
+
+def parts(out: pathlib.Path, sizes=(0.22,), increments: int = 6, repeats: int = 40) -> list[dict]:
+    """The parts of a Newton iteration, and the floor's, timed at the ring's state after
+    ``increments`` increments in three conditions: back to back (the minimum over seven batches of
+    ``repeats`` calls), each right after a Jacobian assembly, factorisation and solve (as a Newton
+    iteration meets the residual) and each after 4 ms of the interpreter alone (medians of
+    ``repeats``). Wall microseconds of one rank: parts.csv and parts.png."""
+    rows = []
+    for size in sizes:
+        run = short_run("ring", size, increments)
+        m, newton = run["model"], run["newton"]
+        floor_it = ElasticFloor(m)
+        x, du, w = compat.petsc_vec(m.u), compat.petsc_vec(m.du), compat.petsc_vec(floor_it.w)
+        tiny = np.ones(16)
+        cases = {
+            "residual (stress evaluated again)": lambda: (m.evaluate_stress(again=True), newton.residual()),
+            "stress evaluation": lambda: m.evaluate_stress(again=True),
+            "residual without the stress": newton.residual,
+            "Jacobian": lambda: compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs),
+            "floor: elastic matrix": lambda: compat.assemble_matrix(floor_it.A, floor_it.a, m.bcs),
+            "floor: elastic residual": lambda: compat.assemble_vector(floor_it.b, floor_it.L, floor_it.a,
+                                                                      m.bcs, w),
+            "NumPy: sum of 16 values": tiny.sum,
+            "PETSc: a vector's norm": newton.b.norm,
+        }
+
+        def factorise():
+            compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs)
+            linear.solve(newton.ksp, newton.petsc_options, newton.b, du, m.comm)
+
+        def timed(before, part):
+            t = []
+            for _ in range(repeats):
+                before()
+                t0 = time.perf_counter()
+                part()
+                t.append(time.perf_counter() - t0)
+            return float(np.median(t))
+        for name, part in cases.items():
+            part()
+            alone = []
+            for _ in range(7):
+                t0 = time.perf_counter()
+                for _ in range(repeats):
+                    part()
+                alone.append((time.perf_counter() - t0) / repeats)
+            row = {"size": size, "dofs": run["dofs"], "part": name, "alone_us": 1e6 * min(alone),
+                   "after_factorisation_us": 1e6 * timed(factorise, part),
+                   "after_idle_us": 1e6 * timed(lambda: _idle(4e-3), part)}
+            rows.append(row)
+            _say(f"ring size {size}, {name}: alone {row['alone_us']:.1f} us, after a factorisation "
+                 f"{row['after_factorisation_us']:.1f} us, after 4 ms of the interpreter "
+                 f"{row['after_idle_us']:.1f} us")
+        floor_it.destroy()
+    _write_csv(out / "parts.csv", rows)
+    if COMM.rank == 0 and rows:
+        _parts_chart(out / "parts.png", rows)
+    return rows
+
+
+def _parts_chart(path: pathlib.Path, rows: list[dict]) -> None:
+    """Horizontal bars, one group per part of the first size: the three conditions."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    size = rows[0]["size"]
+    rows = [r for r in rows if r["size"] == size]
+    y = np.arange(len(rows))
+    fig, ax = plt.subplots(figsize=(7.4, 4.4))
+    for k, (key, label) in enumerate((("alone_us", "back to back"),
+                                      ("after_factorisation_us", "after a factorisation and solve"),
+                                      ("after_idle_us", "after 4 ms of the interpreter"))):
+        ax.barh(y + (k - 1) * 0.27, [r[key] for r in rows], height=0.27, label=label)
+    ax.set_yticks(y, [r["part"] for r in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xscale("log")
+    ax.set_xlabel("wall time of one call, microseconds")
+    ax.set_title(f"ring, {rows[0]['dofs']} dofs: the parts of an iteration and when they run", fontsize=10)
+    ax.grid(True, axis="x", which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(prog="python -m comove_dolfinx.cost", description=__doc__.split("\n")[0])
-    p.add_argument("study", choices=("floor", "solvers", "scale", "slopes"))
+    p.add_argument("study", choices=("floor", "parts", "solvers", "scale", "slopes"))
     p.add_argument("--out", default="results/cost")
-    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--repeats", type=int, default=None,
+                   help="runs per figure (floor, solvers, scale: 3) or calls per timing (parts: 40)")
     p.add_argument("--increments", type=int, default=None, help="nominal increments of each short run")
     p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers, slopes)")
     p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
@@ -514,6 +614,8 @@ def main(argv=None) -> None:
     a = p.parse_args(argv)
     if a.overrides and a.study not in ("floor", "slopes"):
         p.error("--set applies to the floor and slopes studies only")
+    if a.study == "parts" and COMM.size > 1:
+        p.error("parts times one rank: run it without mpirun")
     try:
         get_scene("ring", a.overrides)
     except SceneError as err:
@@ -523,15 +625,17 @@ def main(argv=None) -> None:
     if COMM.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     COMM.barrier()
-    kw = {"repeats": a.repeats}
+    kw = {"repeats": a.repeats} if a.repeats else {}
     if a.increments:
         kw["increments"] = a.increments
     if a.sizes and a.study != "scale":
         kw["sizes"] = tuple(float(s) for s in a.sizes.split(","))
     if a.study == "floor":
         floor(out, overrides=tuple(a.overrides), **kw)
+    elif a.study == "parts":
+        parts(out, **kw)
     elif a.study == "slopes":
-        kw.pop("repeats")
+        kw.pop("repeats", None)
         slopes(out, overrides=tuple(a.overrides), **kw)
     elif a.study == "solvers":
         solvers(out, names=a.solvers.split(",") if a.solvers else None, **kw)

@@ -73,3 +73,29 @@ def test_slope_probe_sees_the_exact_tangent_and_leaves_the_run_as_it_was(tmp_pat
     rows = read_table(tmp_path / "slopes.csv")
     assert len(rows) % len(cost.SLOPE_STEPS) == 0 and rows
     assert (tmp_path / "slopes.png").stat().st_size > 0
+
+
+def test_parts_study_times_each_part_three_ways_and_leaves_the_state(tmp_path):
+    """`cost parts` writes one row per part with its three timings (the figures themselves are
+    benchmarks, not asserted); the stress it evaluates again for the timing (which Newton would
+    skip at the same iterate) is the state's to the last bit, so the timing changes nothing the run
+    would see."""
+    run = cost.short_run("ring", 0.22, 3)
+    m, newton = run["model"], run["newton"]
+    rnorm = newton.residual()          # the committed state's iterate, evaluated once
+    sigma = m.state.sigma.x.array.copy()
+    m.state.sigma.x.array[:] = 0.0
+    m.evaluate_stress()                # the same iterate: nothing done, the zeros stay
+    assert not m.state.sigma.x.array.any() and np.abs(sigma).max() > 0.0
+    m.evaluate_stress(again=True)
+    assert np.array_equal(m.state.sigma.x.array, sigma) and newton.residual() == rnorm
+    cost.main(["parts", "--sizes", "0.22", "--increments", "2", "--repeats", "2", "--out", str(tmp_path)])
+    rows = read_table(tmp_path / "parts.csv")
+    assert [r["part"] for r in rows] == [
+        "residual (stress evaluated again)", "stress evaluation", "residual without the stress",
+        "Jacobian", "floor: elastic matrix", "floor: elastic residual", "NumPy: sum of 16 values",
+        "PETSc: a vector's norm"]
+    for r in rows:
+        t = [float(r[k]) for k in ("alone_us", "after_factorisation_us", "after_idle_us")]
+        assert all(np.isfinite(v) and v > 0.0 for v in t), r
+    assert (tmp_path / "parts.png").stat().st_size > 0
