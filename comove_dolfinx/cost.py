@@ -526,7 +526,7 @@ def parts(out: pathlib.Path, sizes=(0.22,), increments: int = 6, repeats: int = 
         run = short_run("ring", size, increments)
         m, newton = run["model"], run["newton"]
         floor_it = ElasticFloor(m)
-        x, du, w = compat.petsc_vec(m.u), compat.petsc_vec(m.du), compat.petsc_vec(floor_it.w)
+        du, w = compat.petsc_vec(m.du), compat.petsc_vec(floor_it.w)
         tiny = np.ones(16)
         cases = {
             "residual (stress evaluated again)": lambda: (m.evaluate_stress(again=True), newton.residual()),
