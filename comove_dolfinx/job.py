@@ -196,6 +196,11 @@ class Run:
         return self.model.comm
 
 
+def _topics(run: Run) -> set[str]:
+    """What the run has warned of so far: each warning's topic, the words before its colon."""
+    return {w.split(":")[0] for w in run.warnings}
+
+
 class Job:
     """A body, its items, the steps, the probes and the writers (see the module docstring)."""
 
@@ -336,7 +341,7 @@ class Job:
     def _check_supports(self, run: Run, model: Model, k: int) -> None:
         """Warn (once) when a step starts with supports that leave a rigid-body motion free."""
         free = model.free_motions()
-        if free and "supports" not in {w.split(":")[0] for w in run.warnings}:
+        if free and "supports" not in _topics(run):
             when = f"from step {k + 1} " if len(self.steps) > 1 else ""
             run.warnings.append(
                 f"supports: {when}the supports leave the body free to move rigidly ({', '.join(free)}); "
@@ -347,8 +352,8 @@ class Job:
     def _check_workspace(run: Run) -> None:
         """Warn (once) when MUMPS ran out of workspace and the solver gave it more (solver/linear.py,
         grow_workspace): each time costs a new analysis and factorisation."""
-        grown = getattr(run.newton, "workspace", None)
-        if grown is not None and "linear solver" not in {w.split(":")[0] for w in run.warnings}:
+        grown = run.newton.workspace
+        if grown is not None and "linear solver" not in _topics(run):
             run.warnings.append(
                 f"linear solver: MUMPS's workspace was too small for a tangent and was raised to {grown} % "
                 "over its estimate, each time with a new analysis and factorisation: start with "
@@ -362,7 +367,7 @@ class Job:
         is a sizeable part of an element: results that are computed but should not be trusted; and
         of a linear solver that had to be given more workspace (the run repeats factorisations)."""
         self._check_workspace(run)
-        m, said = run.model, {w.split(":")[0] for w in run.warnings}
+        m, said = run.model, _topics(run)
         if m.plastic is not None and "plastic strain" not in said:
             last = m.plastic.hardening.strain[-1]
             p = m.comm.allreduce(float(m.p.x.array.max()) if m.p.x.array.size else 0.0, op=MPI.MAX)

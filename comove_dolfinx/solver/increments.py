@@ -16,8 +16,9 @@ when an increment of that size fails, the run stops cleanly (every converged inc
 been handed out). A linear solver that fails for want of memory or of a feature of its build
 (newton.py, ``hopeless``) stops the run at once: halving would fail the same way. The floor is
 absolute, not a count of failures in a row: near a limit load, where increments converge only when
-small and fail again once grown, a count would creep towards the limit for ever. After ``grow_after`` easy increments (at most ``easy_its`` iterations) the increment
-doubles again, never beyond its nominal size, so the run comes back onto the nominal load levels.
+small and fail again once grown, a count would creep towards the limit for ever. After
+``grow_after`` easy increments (at most ``easy_its`` iterations) the increment doubles again, never
+beyond its nominal size, so the run comes back onto the nominal load levels.
 
 Data flows one way: :meth:`IncrementalSolver.increments` yields each converged increment before
 committing it (the consumer reads the converged state), and commits when the consumer asks for the
