@@ -174,8 +174,13 @@ def petsc_vec(f) -> PETSc.Vec:
     return f.vector if _OLD else f.x.petsc_vec
 
 
-def create_matrix(a) -> PETSc.Mat:
-    return fem_petsc.create_matrix(a)
+def create_matrix(a, kind: str | None = None) -> PETSc.Mat:
+    """A PETSc matrix for the bilinear form ``a``: dolfinx's default (AIJ), or of the PETSc type
+    ``kind`` ("baij"); the type is the second argument on every level (``mat_type`` up to 0.9,
+    ``kind`` from 0.10)."""
+    if kind is None:
+        return fem_petsc.create_matrix(a)
+    return fem_petsc.create_matrix(a, kind)
 
 
 def create_vector(L) -> PETSc.Vec:

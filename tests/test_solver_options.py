@@ -11,7 +11,7 @@ from mpi4py import MPI
 from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.presets import get_scene
 from comove_dolfinx.solver import IncrementalSolver, NewtonSettings, StepSettings
-from comove_dolfinx.solver.linear import PREFIX, SolverOptionError
+from comove_dolfinx.solver.linear import PREFIX, SolverOptionError, make_ksp, matrix_kind
 
 ITERATIVE = {"ksp_type": "gmres", "pc_type": "gamg", "ksp_rtol": 1e-12, "ksp_max_it": 500,
              "ksp_gmres_restart": 100}
@@ -51,6 +51,78 @@ def mumps():
     assert res.completed, res.message
     assert solver.newton.ksp.getPC().getFactorSolverType() == "mumps"
     return _nodal(model), res.newton_its
+
+
+@pytest.mark.parametrize("options, kind", [
+    ({}, "baij"),
+    ({"pc_factor_mat_solver_type": "petsc"}, "baij"),
+    ({"pc_factor_mat_solver_type": "superlu_dist"}, None),
+    ({"pc_factor_mat_solver_type": "umfpack"}, None),
+    ({"pc_type": "cholesky"}, None),
+    (ITERATIVE, None),
+])
+def test_the_matrix_type_follows_the_solver(options, kind):
+    """An LU factorisation by MUMPS or PETSc gets the blocked matrix (BAIJ); solvers that take AIJ
+    only (SuperLU_dist, UMFPACK), MUMPS's Cholesky and the iterative ones get dolfinx's default."""
+    ksp = make_ksp(MPI.COMM_WORLD, None, options)
+    assert matrix_kind(ksp) == kind
+    ksp.destroy()
+
+
+@pytest.mark.mpi
+def test_the_blocked_tangent_is_the_tangent():
+    """Newton's matrix with MUMPS is BAIJ; the plate's tangent assembled into it holds the entries of
+    the same tangent assembled into dolfinx's AIJ, to the last bit on one rank (the same sums in the
+    same order; on two, where rows shared with another rank are summed as the exchanges arrive, to
+    round-off), and MUMPS solves the two to the same correction."""
+    from comove_dolfinx import compat
+    from comove_dolfinx.solver.linear import make_solver
+    model, solver, res = _plate({})
+    assert res.completed, res.message
+    newton = solver.newton
+    assert newton.A.getType() in ("seqbaij", "mpibaij")
+    compat.assemble_matrix(newton.A, model.jacobian_form, model.bcs)
+    plain = compat.create_matrix(model.jacobian_form)
+    assert plain.getType() in ("seqaij", "mpiaij")
+    compat.assemble_matrix(plain, model.jacobian_form, model.bcs)
+    from petsc4py import PETSc
+    blocked = newton.A.convert("aij", PETSc.Mat())      # a copy (without out: in place)
+    blocked.axpy(-1.0, plain)
+    diff, size = blocked.norm(), plain.norm()
+    if MPI.COMM_WORLD.size == 1:
+        assert diff == 0.0 and size > 0.0
+    else:          # the entries from other ranks are summed in the order the exchanges arrive
+        assert diff <= 1e-14 * size
+    rhs = newton.b.duplicate()
+    rhs.setRandom()
+    solutions = []
+    for A in (newton.A, plain):
+        ksp = make_ksp(MPI.COMM_WORLD, A, {})
+        x = rhs.duplicate()
+        ksp.solve(rhs, x)
+        assert ksp.getConvergedReason() > 0
+        solutions.append(x)
+        ksp.destroy()
+    solutions[0].axpy(-1.0, solutions[1])
+    assert solutions[0].norm() <= 1e-12 * solutions[1].norm()
+    for obj in (plain, blocked, rhs, *solutions):
+        obj.destroy()
+
+
+@pytest.mark.mpi
+def test_superlu_dist_gives_the_mumps_solution(mumps):
+    """SuperLU_dist, which takes AIJ only, runs on dolfinx's default matrix and gives MUMPS's
+    iterations and displacements to round-off (skipped where PETSc was built without it)."""
+    from petsc4py import PETSc
+    if not PETSc.Sys.hasExternalPackage("superlu_dist"):
+        pytest.skip("this PETSc has no SuperLU_dist")
+    model, solver, res = _plate({"pc_factor_mat_solver_type": "superlu_dist"})
+    assert res.completed, res.message
+    assert solver.newton.A.getType() in ("seqaij", "mpiaij")
+    ref, its = mumps
+    assert res.newton_its == its
+    diff, size = _difference(model, ref)
+    assert diff <= 1e-10 * size
 
 
 def test_petsc_lu_gives_the_mumps_solution(mumps):

@@ -362,8 +362,9 @@ class Model:
         """Stress (and tangent) at every quadrature point for the current displacement iterate; nothing
         to do when the state already holds this iterate's (the same u, converged state and elastic
         constants: e.g. Newton's first residual after a friction re-lag pass, at the iterate just solved),
-        unless ``again`` (the cost benchmarks). The converged state changes through :meth:`commit`
-        and :meth:`load_state` only.
+        unless ``again``: evaluated without that comparison, for a caller that has just set a new
+        iterate (the line searches' trials) or wants the evaluation itself (the cost benchmarks).
+        The converged state changes through :meth:`commit` and :meth:`load_state` only.
 
         Raises, on every rank when it happens on any: :class:`InvertedElement` if det F <= 0 at a
         point, :class:`ReturnMapFailure` if the update is not defined (NaN) or the return map fails.

@@ -16,6 +16,8 @@ solved from them, so that the facet stress of that solution can be evaluated aga
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from dolfinx import fem
 
@@ -67,11 +69,11 @@ class QuadratureState:
         """From the evaluated update (columns: trial stress, rotated old stress if plastic, the
         update's own state if any, det F; or with ``compiled``: stress, p, ..., det F) to the
         stress (and, where stored, the tangents) at the points."""
-        detF = vals[:, -1]
-        if not np.all(np.isfinite(vals)):
+        if not math.isfinite(vals.sum()):      # a NaN or an infinity anywhere
             raise ReturnMapFailure("the stress update returned NaN (increment too large?)")
-        if detF.size and detF.min() <= 0.0:
-            raise InvertedElement(f"det F = {detF.min():.3g} <= 0 at a quadrature point")
+        worst = vals[:, -1].min() if len(vals) else 1.0
+        if worst <= 0.0:
+            raise InvertedElement(f"det F = {worst:.3g} <= 0 at a quadrature point")
         view = self.rule.view
         sig_tr, col = vals[:, 0:4], 4
         if self.plastic is None:

@@ -16,6 +16,7 @@ from contextlib import contextmanager
 
 from petsc4py import PETSc
 
+from .. import compat
 from ..mechanics.model import rigid_motions
 from ..parallel import first_failure
 
@@ -55,14 +56,16 @@ def pushed(options: dict):
                 db.setValue(name, old or None)
 
 
-def make_ksp(comm, A: PETSc.Mat, options: dict) -> PETSc.KSP:
-    """The KSP on A: the defaults, then the options of the database and ``options``."""
+def make_ksp(comm, A: PETSc.Mat | None, options: dict) -> PETSc.KSP:
+    """The KSP on A (none yet when None): the defaults, then the options of the database and
+    ``options``."""
     for key in options:
         if not isinstance(key, str) or not key.strip("-"):
             raise SolverOptionError(f"petsc_options: {key!r} is not an option name")
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(PREFIX)
-    ksp.setOperators(A)
+    if A is not None:
+        ksp.setOperators(A)
     ksp.setType(DEFAULTS["ksp_type"])
     pc = ksp.getPC()
     pc.setType(DEFAULTS["pc_type"])
@@ -75,6 +78,32 @@ def make_ksp(comm, A: PETSc.Mat, options: dict) -> PETSc.KSP:
         raise SolverOptionError(f"PETSc refused the linear solver's options under the prefix "
                                 f"{PREFIX!r} ({shown}; PETSC_OPTIONS too): PETSc error {err}") from None
     return ksp
+
+
+#: the factorisations (PCFactorSetMatSolverType) that take PETSc's blocked matrix BAIJ in an LU
+#: solve: there the assembly inserts one 2 x 2 block per pair of nodes instead of four entries,
+#: which halves the cost of assembling the tangent (docs/performance.md, the linear solver). SuperLU_dist,
+#: UMFPACK and the iterative solvers get dolfinx's default matrix (AIJ).
+BLOCKED_FACTORS = ("mumps", "petsc")
+
+
+def matrix_kind(ksp: PETSc.KSP) -> str | None:
+    """The PETSc matrix type for the operator of ``ksp`` (its options already read): "baij" for an LU
+    factorisation by MUMPS or PETSc, None (dolfinx's default, AIJ) for anything else."""
+    pc = ksp.getPC()
+    if ksp.getType() == "preonly" and pc.getType() == "lu" and \
+            pc.getFactorSolverType() in BLOCKED_FACTORS:
+        return "baij"
+    return None
+
+
+def make_solver(comm, a, options: dict) -> tuple[PETSc.KSP, PETSc.Mat]:
+    """The KSP of :func:`make_ksp` and, as its operator, a matrix for the bilinear form ``a`` of the
+    type that solver takes (:func:`matrix_kind`)."""
+    ksp = make_ksp(comm, None, options)
+    A = compat.create_matrix(a, matrix_kind(ksp))
+    ksp.setOperators(A)
+    return ksp, A
 
 
 #: the largest workspace the solver raises ICNTL(14) to on its own (per cent over the analysis's

@@ -13,20 +13,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import compat
 from ..mechanics.model import InvertedElement, ReturnMapFailure
 
 
 class LineSearches:
-    """Mixed into Newton: needs model, settings, b (= -R), _b_old and residual()."""
+    """Mixed into Newton: needs model, settings, b (= -R), _b_old, residual(), and the iterate's
+    and the correction's arrays _u, _du and the correction's PETSc vector _du_vec."""
 
     def _trial(self, u0: np.ndarray, alpha: float):
         """u = u0 + alpha du and its ||R||; (None, error) if the iterate is inadmissible."""
-        m = self.model
-        m.u.x.array[:] = u0 + alpha * m.du.x.array
+        np.multiply(self._du, alpha, out=self._u)
+        self._u += u0
         self._last_trial = None
         try:
-            r = self.residual()
+            r = self.residual(again=True)          # a new iterate: no need to compare it
         except (InvertedElement, ReturnMapFailure) as e:
             return None, e
         self._last_trial = (alpha, r)
@@ -36,7 +36,7 @@ class LineSearches:
         """End a search on the chosen step (or back at u0 when no trial was admissible); the model
         already holds the chosen step when it was the last trial."""
         if alpha is None:
-            self.model.u.x.array[:] = u0
+            self._u[:] = u0
             return r_old, 0.0, err
         if self._last_trial is not None and self._last_trial[0] == alpha:
             return self._last_trial[1], alpha, None
@@ -47,7 +47,7 @@ class LineSearches:
         """Move u along the Newton correction du: the full step if it is admissible and lowers
         ||R||; otherwise halve it (up to ``backtracks`` times) until ||R|| <= (1 - 1e-4 alpha) r_old,
         keeping the best admissible step when none does. Returns (||R||, alpha, error or None)."""
-        u0 = self.model.u.x.array.copy()
+        u0 = self._u.copy()
         best, alpha, err = None, 1.0, None
         for _ in range(self.settings.backtracks + 1):
             r, e = self._trial(u0, alpha)
@@ -67,9 +67,9 @@ class LineSearches:
         otherwise regula falsi on the bracket of the sign change (at most ``backtracks`` more
         trials), keeping the trial of smallest |s|. An inadmissible trial is halved.
         Returns (||R||, alpha, error or None)."""
-        m, st = self.model, self.settings
-        u0 = m.u.x.array.copy()
-        s0 = -self._b_old.dot(compat.petsc_vec(m.du))           # b = -R
+        st = self.settings
+        u0 = self._u.copy()
+        s0 = -self._b_old.dot(self._du_vec)           # b = -R
         lo, hi = (0.0, s0), None
         alpha, err, best = 1.0, None, None
         for _ in range(st.backtracks + 1):
@@ -78,7 +78,7 @@ class LineSearches:
                 err, hi = e, None
                 alpha = 0.5 * (lo[0] + alpha)
                 continue
-            s1 = -self.b.dot(compat.petsc_vec(m.du))
+            s1 = -self.b.dot(self._du_vec)
             if best is None or abs(s1) < best[0]:
                 best = (abs(s1), alpha)
             if abs(s1) <= st.energy_eta * abs(s0) or (s1 * s0 > 0 and hi is None):

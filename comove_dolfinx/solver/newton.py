@@ -115,10 +115,9 @@ class Newton(LineSearches):
         self.model = model
         self.settings = settings or NewtonSettings()
         self.timer = timer or Timer()
-        self.A = compat.create_matrix(model.jacobian_form)
         self.b = compat.create_vector(model.residual_form)
         self.petsc_options = dict(self.settings.petsc_options or {})
-        self.ksp = linear.make_ksp(model.comm, self.A, self.petsc_options)
+        self.ksp, self.A = linear.make_solver(model.comm, model.jacobian_form, self.petsc_options)
         if not linear.is_direct(self.ksp):       # algebraic multigrid needs the rigid-body modes
             self.A.setNearNullSpace(linear.rigid_body_modes(model.V, self.A))
         ls = self.settings.line_search
@@ -131,6 +130,10 @@ class Newton(LineSearches):
             raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
         if self.settings.scale == "force":     # every residual assembles these two: compiled here,
             _ = model.internal_force_form, model.items_form     # not in the first increment
+        # the iterate, the correction and their PETSc vectors (views of the same memory, for the life
+        # of the model's Functions)
+        self._u, self._du = model.u.x.array, model.du.x.array
+        self._u_vec, self._du_vec = compat.petsc_vec(model.u), compat.petsc_vec(model.du)
         self._b_old = self.b.duplicate()
         self._f = self.b.duplicate()
         self._w = self.b.duplicate()          # scratch: the constraint gap g - u
@@ -144,17 +147,19 @@ class Newton(LineSearches):
         self.poll = None                   # called by every rank before each iteration (a job's
                                            # collective check for Ctrl-C and SIGTERM: parallel.py)
 
-    def residual(self) -> float:
-        """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm."""
+    def residual(self, again: bool = False) -> float:
+        """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm.
+        ``again``: the stress is evaluated without first comparing u with the iterate the state holds
+        (for a caller that has just set a new iterate: Model.evaluate_stress)."""
         m, b = self.model, self.b
         with self.timer("stress update"):
             try:
-                m.evaluate_stress()
+                m.evaluate_stress(again)
             except (InvertedElement, ReturnMapFailure) as err:
                 self._notify("rejected", err)
                 raise
         with self.timer("assembly"):
-            x = compat.petsc_vec(m.u)
+            x = self._u_vec
             lift = compat.constraint_gap(self._w, m.bcs, x) > 0.0     # else the lifting adds 0
             if self.settings.scale == "force":    # F_int on its own, the items' terms added
                 compat.assemble_vector(self._f, m.internal_force_form)
@@ -242,13 +247,13 @@ class Newton(LineSearches):
                 return True, it - 1, "converged"
             with self.timer("jacobian"):
                 compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
-            self.u_factorised = m.u.x.array.copy()        # a checkpoint rebuilds this tangent
+            self.u_factorised = self._u.copy()        # a checkpoint rebuilds this tangent
             with self.timer("solve"):
                 failure = self._solve_linear()
             if failure is not None:
                 return False, it, failure
             self.factorised = True
-            dnorm = compat.petsc_vec(m.du).norm()
+            dnorm = self._du_vec.norm()
             if not np.isfinite(dnorm):
                 return False, it, "the Newton correction is not finite (singular tangent?)"
             self._notify("correction", it)
@@ -266,7 +271,7 @@ class Newton(LineSearches):
                      rnorm / max(self.residual_scale, 1e-300), dnorm)
             if not np.isfinite(rnorm) or rnorm > s.divergence * max(r0, s.atol):
                 return False, it, f"diverged (|R| = {rnorm:.3e})"
-            if alpha == 1.0 and dnorm <= s.stol * compat.petsc_vec(m.u).norm():
+            if alpha == 1.0 and dnorm <= s.stol * self._u_vec.norm():
                 return True, it, "converged"
         converged = self._converged(rnorm, s.max_it)
         return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
