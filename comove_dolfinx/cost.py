@@ -72,6 +72,8 @@ SOLVERS = {
     "mumps_pord": {"mat_mumps_icntl_7": 4},
     "mumps_metis": {"mat_mumps_icntl_7": 5},
     "mumps_qamd": {"mat_mumps_icntl_7": 6},
+    "mumps_scaled": {"mat_mumps_icntl_8": 77},        # MUMPS's own default: a scaling computed at
+                                                      # every factorisation (linear.MUMPS_DEFAULTS)
     "petsc_nd": {"pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "nd"},
     "umfpack": {"pc_factor_mat_solver_type": "umfpack"},
     "superlu_dist": {"pc_factor_mat_solver_type": "superlu_dist"},
@@ -171,7 +173,8 @@ class ElasticFloor:
             return lam * ufl.tr(eps) * ufl.Identity(2) + 2 * mu * eps
         self.a = compat.form(ufl.inner(sigma(u), ufl.sym(ufl.grad(v))) * model.rule.dx)
         self.L = compat.form(ufl.inner(sigma(self.w), ufl.sym(ufl.grad(v))) * model.rule.dx)
-        self.ksp, self.A = make_solver(model.comm, self.a, {})      # the matrix Newton's has
+        self.options = linear.with_defaults({})                    # Newton's solver, matrix type
+        self.ksp, self.A = make_solver(model.comm, self.a, self.options)
         self.b = compat.create_vector(self.L)
         self.x = self.b.duplicate()
         self.rng = np.random.default_rng(0)
@@ -186,7 +189,7 @@ class ElasticFloor:
         c1 = _cpu()
         compat.assemble_vector(self.b, self.L, self.a, m.bcs, compat.petsc_vec(self.w))
         c2 = _cpu()
-        with pushed({}):
+        with pushed(self.options):
             self.ksp.solve(self.b, self.x)
         times = (c1 - c0, c2 - c1, _cpu() - c2)
         return tuple(m.comm.allreduce(float(t), op=MPI.SUM) for t in times)
@@ -200,6 +203,7 @@ def factor_solve(newton: Newton, options: dict, repeats: int) -> list[float]:
     """CPU seconds of one factorisation and solve of the Newton's current tangent with another
     linear solver (symbolic set-up at a first, untimed solve); one per repeat."""
     m = newton.model
+    options = linear.with_defaults(options)
     ksp, A = make_solver(m.comm, m.jacobian_form, options)       # the matrix type it takes
     x = newton.b.duplicate()
     out = []
@@ -356,8 +360,8 @@ def _profile(out: pathlib.Path, size: float, increments: int, overrides=()) -> N
 
 
 def solvers(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 3, increments: int = 2,
-            names=None, run_names=("mumps_auto", "mumps_metis", "mumps_amd", "petsc_nd",
-                                   "gmres_gamg")) -> list[dict]:
+            names=None, run_names=("mumps_auto", "mumps_metis", "mumps_amd", "mumps_scaled",
+                                   "petsc_nd", "gmres_gamg")) -> list[dict]:
     """Factorisation + solve of the ring's tangent after ``increments`` increments, every solver;
     the short run itself with the solvers of ``run_names``."""
     names = list(names or SOLVERS)

@@ -110,6 +110,32 @@ def test_the_blocked_tangent_is_the_tangent():
 
 
 @pytest.mark.mpi
+def test_mumps_scales_nothing_unless_asked_and_gives_the_same_solution(mumps):
+    """MUMPS factorises without its scaling by default (ICNTL(8) = 0, linear.MUMPS_DEFAULTS); with
+    its own default (77: a row and column scaling at each factorisation) given in the settings, the
+    plate takes the same iterations to the same displacements, to round-off. A value in PETSc's
+    database (PETSC_OPTIONS) is left to it."""
+    from petsc4py import PETSc
+    from comove_dolfinx.solver.linear import with_defaults
+    ref, its = mumps
+    for options, icntl_8 in (({}, 0), ({"mat_mumps_icntl_8": 77}, 77)):
+        model, solver, res = _plate(options)
+        assert res.completed, res.message
+        assert solver.newton.ksp.getPC().getFactorMatrix().getMumpsIcntl(8) == icntl_8
+        assert res.newton_its == its
+        diff, size = _difference(model, ref)
+        assert diff <= 1e-10 * size
+    db = PETSc.Options()
+    db.setValue(PREFIX + "mat_mumps_icntl_8", "77")
+    try:
+        assert "mat_mumps_icntl_8" not in with_defaults({})
+    finally:
+        db.delValue(PREFIX + "mat_mumps_icntl_8")
+    assert with_defaults({})["mat_mumps_icntl_8"] == 0
+    assert with_defaults({"-mat_mumps_icntl_8": 7}) == {"-mat_mumps_icntl_8": 7}
+
+
+@pytest.mark.mpi
 def test_superlu_dist_gives_the_mumps_solution(mumps):
     """SuperLU_dist, which takes AIJ only, runs on dolfinx's default matrix and gives MUMPS's
     iterations and displacements to round-off (skipped where PETSc was built without it)."""
