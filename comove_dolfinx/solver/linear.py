@@ -1,7 +1,9 @@
 """The linear solver of Newton: a PETSc KSP under the options prefix ``comove_``.
 
 Defaults: preonly + LU + MUMPS (a direct solve; the symbolic analysis is done at the first
-factorisation and reused while the sparsity stays). PETSc options under the prefix change them, from
+factorisation and reused while the sparsity stays), MUMPS without its scaling (MUMPS_DEFAULTS), and
+the tangent in the matrix type the solver takes (matrix_kind: PETSc's blocked BAIJ for an LU by MUMPS
+or PETSc, AIJ otherwise). PETSc options under the prefix change them, from
 the PETSC_OPTIONS environment variable or the command line (``-comove_pc_factor_mat_solver_type
 petsc``, ``-comove_mat_mumps_icntl_7 5``, ``-comove_ksp_type gmres -comove_pc_type gamg``) or from
 ``NewtonSettings.petsc_options`` (keys without the prefix). The settings' options are put into
