@@ -173,8 +173,7 @@ class ElasticFloor:
             return lam * ufl.tr(eps) * ufl.Identity(2) + 2 * mu * eps
         self.a = compat.form(ufl.inner(sigma(u), ufl.sym(ufl.grad(v))) * model.rule.dx)
         self.L = compat.form(ufl.inner(sigma(self.w), ufl.sym(ufl.grad(v))) * model.rule.dx)
-        self.options = linear.with_defaults({})                    # Newton's solver, matrix type
-        self.ksp, self.A = make_solver(model.comm, self.a, self.options)
+        self.ksp, self.A, self.options = make_solver(model.comm, self.a, {})   # Newton's solver
         self.b = compat.create_vector(self.L)
         self.x = self.b.duplicate()
         self.rng = np.random.default_rng(0)
@@ -203,8 +202,7 @@ def factor_solve(newton: Newton, options: dict, repeats: int) -> list[float]:
     """CPU seconds of one factorisation and solve of the Newton's current tangent with another
     linear solver (symbolic set-up at a first, untimed solve); one per repeat."""
     m = newton.model
-    options = linear.with_defaults(options)
-    ksp, A = make_solver(m.comm, m.jacobian_form, options)       # the matrix type it takes
+    ksp, A, options = make_solver(m.comm, m.jacobian_form, options)   # the matrix type it takes
     x = newton.b.duplicate()
     out = []
     for k in range(repeats + 1):

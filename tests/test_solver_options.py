@@ -76,7 +76,6 @@ def test_the_blocked_tangent_is_the_tangent():
     same order; on two, where rows shared with another rank are summed as the exchanges arrive, to
     round-off), and MUMPS solves the two to the same correction."""
     from comove_dolfinx import compat
-    from comove_dolfinx.solver.linear import make_solver
     model, solver, res = _plate({})
     assert res.completed, res.message
     newton = solver.newton

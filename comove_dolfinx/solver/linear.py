@@ -118,13 +118,15 @@ def matrix_kind(ksp: PETSc.KSP) -> str | None:
     return None
 
 
-def make_solver(comm, a, options: dict) -> tuple[PETSc.KSP, PETSc.Mat]:
-    """The KSP of :func:`make_ksp` and, as its operator, a matrix for the bilinear form ``a`` of the
-    type that solver takes (:func:`matrix_kind`)."""
+def make_solver(comm, a, options: dict) -> tuple[PETSc.KSP, PETSc.Mat, dict]:
+    """(KSP, matrix, options): the KSP of :func:`make_ksp` under ``options`` with the defaults of
+    :func:`with_defaults`, and as its operator a matrix for the bilinear form ``a`` of the type that
+    solver takes (:func:`matrix_kind`); the options are those to push at each solve."""
+    options = with_defaults(options)
     ksp = make_ksp(comm, None, options)
     A = compat.create_matrix(a, matrix_kind(ksp))
     ksp.setOperators(A)
-    return ksp, A
+    return ksp, A, options
 
 
 #: the largest workspace the solver raises ICNTL(14) to on its own (per cent over the analysis's

@@ -116,8 +116,8 @@ class Newton(LineSearches):
         self.settings = settings or NewtonSettings()
         self.timer = timer or Timer()
         self.b = compat.create_vector(model.residual_form)
-        self.petsc_options = linear.with_defaults(self.settings.petsc_options or {})
-        self.ksp, self.A = linear.make_solver(model.comm, model.jacobian_form, self.petsc_options)
+        self.ksp, self.A, self.petsc_options = linear.make_solver(
+            model.comm, model.jacobian_form, self.settings.petsc_options or {})
         if not linear.is_direct(self.ksp):       # algebraic multigrid needs the rigid-body modes
             self.A.setNearNullSpace(linear.rigid_body_modes(model.V, self.A))
         ls = self.settings.line_search
