@@ -2,8 +2,8 @@
 implement them check that they implement exactly these."""
 
 MODELS = ("plane_strain", "plane_stress", "axisymmetric")
-UPDATES = ("sr", "hughes_winget", "polar", "svk", "neo_hooke")
-PLASTIC_UPDATES = ("sr", "hughes_winget")      # those that carry a rotated old stress
+UPDATES = ("sr", "hughes_winget", "polar", "svk", "neo_hooke", "small_strain")
+PLASTIC_UPDATES = ("sr", "hughes_winget", "small_strain")   # those that carry a rotated old stress
 CONTACT_METHODS = ("penalty", "nitsche")
 PREDICTORS = {"none": False, "linear": 1, "quadratic": 2, "tangent": "tangent"}
 LAWS = ("j2", "chen")

@@ -111,13 +111,13 @@ def _check(m, c, law, method, friction):
             assert slip == 0.0 and stick > 0.0, (stick, slip)
 
 
-def _order(m):
+def _order(m, h0=1e-4, n=10):
     # steps from 1e-4 of the largest displacement: a friction point that slipped in the last
     # increment starts the next one at its threshold |trial| = s, and a correction that hardly
     # moves it along the obstacle leaves it there; the larger the steps, the likelier one crosses
     # it (from 1e-3, one such point of the Hughes-Winget/Chen state was crossed between h = 2e-6
     # and 8e-6: orders near 1 above it, 2 below)
-    result = taylor_test(m, h0=1e-4, n=10)
+    result = taylor_test(m, h0=h0, n=n)
     return result.orders, str(result)
 
 
@@ -152,6 +152,16 @@ CASES = (
     + [dict(kind="plane_stress", update=u, method="nitsche", theta=-1, friction="none")
        for u in ("polar", "svk", "neo_hooke")]
     + [dict(method=None), dict(method=None, kind="plane_stress", law="j2")]
+    # linear kinematics (small_strain): its internal force is linear in u (elastic) and its loads
+    # dead, so the elastic cases take Nitsche's terms against the circle with friction, which keep the
+    # residual nonlinear, and a Jacobian that missed a part of the linear terms would show order 1
+    # (steps from 1e-2: the remainder of this mild nonlinearity meets round-off, 2e-12, below 2e-6);
+    # the plastic ones the return map (J2 in every model, Chen; Nitsche's facet return in plane stress)
+    + [dict(kind=k, update="small_strain", method="nitsche", theta=-1, obstacle="circle", h0=1e-2)
+       for k in ("plane_strain", "plane_stress", "axisymmetric")]
+    + [dict(kind=k, update="small_strain", law="j2") for k in ("plane_strain", "plane_stress", "axisymmetric")]
+    + [dict(update="small_strain", law="chen"),
+       dict(kind="plane_stress", update="small_strain", law="j2", method="nitsche", theta=0)]
 )
 
 
@@ -164,9 +174,27 @@ def test_jacobian_is_exact(meshes, case):
     case = dict(case)
     if case.get("method") == "nitsche" and case.get("theta") == 1:
         case["gamma0"] = 100.0                        # the symmetric variant needs a stiffer gamma
+    steps = dict(h0=case.pop("h0"), n=8) if "h0" in case else {}
     m, c = _state(meshes, **case)
     _check(m, c, case.get("law"), case.get("method", "penalty"), case.get("friction", "slip"))
-    _assert_second_order(*_order(m))
+    _assert_second_order(*_order(m, **steps))
+
+
+@pytest.mark.parametrize("kind", ["plane_strain", "plane_stress", "axisymmetric"])
+def test_small_strain_elastic_residual_is_affine(meshes, kind):
+    """Linear kinematics, elastic, without contact (the top edge's motion, a pressure, a traction, a
+    body force): the residual is affine in u, so with the exact Jacobian the Taylor remainder is
+    round-off at every step, where a Jacobian off by a part of the stiffness leaves h |dJ w|."""
+    x0 = 0.5 if kind == "axisymmetric" else 0.0
+    m = Model(Body(meshes[x0], kind, as_material(1000.0, 0.3), update="small_strain"),
+              [_top(x0, None), Pressure("right", 5.0), Traction("left", (2.0, -1.0)),
+               BodyForce((2.0, -10.0)), Fixed("bottom")])
+    m.finalize()
+    assert IncrementalSolver(m, StepSettings(n_steps=2, t_end=0.4)).run().completed
+    m.set_load(0.6)
+    m.u.x.array[:] *= 1.5                            # off equilibrium: R(u) is not 0
+    result = taylor_test(m, h0=1e-1, n=6)
+    assert np.all(result.remainders < 1e-11 * result.first_order), str(result)
 
 
 # every other kind of item: a point load, a body force, a displacement field (with plasticity and

@@ -221,8 +221,9 @@ class Contact(Item):
         N = ufl.FacetNormal(msh)
         N3 = ufl.as_vector([N[0], N[1], 0.0])
         stretch = ufl.sqrt(ufl.dot(ufl.det(F) * ufl.inv(F).T * N3, ufl.det(F) * ufl.inv(F).T * N3))
-        # current length of the contact set: in-plane stretch of the boundary where p > 0
-        F2 = ufl.Identity(2) + ufl.grad(ctx.u)
+        # current length of the contact set: in-plane stretch of the boundary where p > 0 (none
+        # under linear kinematics, whose lengths are the reference ones)
+        F2 = ufl.Identity(2) + ufl.grad(ctx.u) if ctx.update.geometric else ufl.Identity(2)
         T = ufl.as_vector([-N[1], N[0]])
         chi = ufl.conditional(ufl.gt(self.p_ref, 0.0), 1.0, 0.0)
         dsc = self.ds_c

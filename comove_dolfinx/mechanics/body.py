@@ -30,8 +30,8 @@ class Body:
         Elastic constants, or an elastic-plastic law with its hardening.
     update : str
         Stress update: "sr" (Chen's S-R decomposition of the increment, default), "hughes_winget",
-        "polar", "svk", "neo_hooke" (docs/theory.md section 3). Plastic bodies need sr or
-        hughes_winget.
+        "polar", "svk", "neo_hooke" (docs/theory.md section 3), or "small_strain" (linear
+        kinematics, section 3.5). Plastic bodies need sr, hughes_winget or small_strain.
     degree : int
         Lagrange degree of the displacement, 1 or 2 (P1 locks in bending).
     thickness : float
@@ -58,7 +58,8 @@ class Body:
         if self.update not in UPDATES:
             raise BodyError(f"update = {self.update!r} is unknown: choose one of {', '.join(UPDATES)}")
         if self.plastic is not None and self.update not in ROTATING_UPDATES:
-            raise MaterialError(f"update {self.update!r} cannot carry plasticity: use sr or hughes_winget")
+            raise MaterialError(f"update {self.update!r} cannot carry plasticity: use one of "
+                                f"{', '.join(ROTATING_UPDATES)}")
         if self.degree not in (1, 2) or isinstance(self.degree, bool):
             raise BodyError(f"degree = {self.degree!r}: use 1 or 2")
         if not (isinstance(self.thickness, (int, float)) and math.isfinite(self.thickness)

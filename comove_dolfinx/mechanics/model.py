@@ -14,7 +14,9 @@ by the return map's derivative D = d sigma / d sigma_trial (identity for elastic
 applied from the stored stress and plastic strain in
 plane strain and axisymmetry, stored by each evaluation in plane stress), and in plane-stress
 plasticity the part of the thickness stretch, dF22 = F22 (G_tr . d sigma_tr + G_rot . d sigma_rot).
-A Taylor test checks it (taylor.py, tests/test_taylor.py).
+A Taylor test checks it (taylor.py, tests/test_taylor.py). Under linear kinematics (the update
+"small_strain", whose ``geometric`` is False) P = sigma on the reference configuration and the
+Jacobian has no geometric part (docs/theory.md section 3.5).
 
 Items (loads.py, contact/) build their terms from a :class:`Context` handed to them once: data flows
 from the model to the items, never back. The load factor t of ``set_load`` sets every item.
@@ -171,12 +173,17 @@ class Model:
         state (docs/performance.md)."""
         u, v, dx, st = self.u, self.v, self.rule.dx, self.state
         up = self.update.build(u, self.u_n, st.sigma_n)
-        F22 = st.F22 if st.F22 is not None else up.F22
-        F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+        geometric = self.update.geometric     # False: linear kinematics, P = sigma on the reference
+        if geometric:
+            F22 = st.F22 if st.F22 is not None else up.F22
+            F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+            cof = cofactor(F)                 # J F^-T
+            P = to_tensor(st.sigma) * cof
+        else:
+            F = self.update.F(u)
+            P = to_tensor(st.sigma)
         self.F = F
-        cof = cofactor(F)                     # J F^-T
         w = self.kin.weight()
-        P = to_tensor(st.sigma) * cof
         internal = ufl.inner(P, self.kin.grad3(v)) * w * dx
         self._internal, self._internal_form, self._jit = internal, None, jit_options
         ctx = self.context()
@@ -203,11 +210,14 @@ class Model:
                 Dx = ufl.dot(st.D, dsig_tr)
             dsig = to_tensor(Dx)
         # the geometric part (sigma held) is sigma d(cof F), the derivative of a polynomial in F
-        dcof = ufl.derivative(cof, u, self.u_trial)
-        Jac = ufl.inner(to_tensor(st.sigma) * dcof + dsig * cof, self.kin.grad3(v)) * w * dx
+        if geometric:
+            dcof = ufl.derivative(cof, u, self.u_trial)
+            Jac = ufl.inner(to_tensor(st.sigma) * dcof + dsig * cof, self.kin.grad3(v)) * w * dx
+        else:
+            Jac = ufl.inner(dsig, self.kin.grad3(v)) * w * dx
         if terms is not None:
             Jac = Jac + ufl.derivative(terms, u, self.u_trial)
-        if st.F22 is not None:
+        if st.F22 is not None and geometric:
             # the direction of a derivative must be free of unevaluated derivatives
             dF22 = expand_derivatives(st.F22 * (ufl.dot(st.G_tr, dsig_tr) + ufl.dot(st.G_rot, dsig_rot)))
             Jac = Jac + ufl.derivative(internal, st.F22, dF22)
@@ -228,12 +238,14 @@ class Model:
         if up.state_new is not None:
             parts.append(up.state_new)
             st.state_new = np.zeros((self.rule.size, 4))
+        # det F (a linear body's is 1: it has no configuration to fold)
         parts.append(ufl.as_vector([ufl.det(self.update.F(u))]))
         self._eval = self.rule.expression(ufl.as_vector([c for p in parts for c in p]))
         # det F at the cells' nodes (vertices and, for P2, edge midpoints): folded_at_nodes
         pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
                        ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if self.degree == 2 else []))
-        self._nodal_det = compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(u)), pts)
+        self._nodal_det = compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(u)), pts) \
+            if geometric else None
         self.set_load(0.0)
 
     def _surface_table(self):
@@ -326,8 +338,12 @@ class Model:
             sig, ezz = self.plastic.facet(up.sigma_rot, up.sigma, p_n, self.kin.model, self.constants)
             if ezz is not None:
                 F22 = src.facet("F22_n") * ufl.exp(ezz)
-        F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
-        PN = sig * cofactor(F) * ufl.as_vector([N[0], N[1], 0.0])
+        N3 = ufl.as_vector([N[0], N[1], 0.0])
+        if not self.update.geometric:          # linear kinematics: sigma N on the reference facet
+            PN = sig * N3
+        else:
+            F = self.kin.F3(u, F22) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+            PN = sig * cofactor(F) * N3
         return ufl.as_vector([PN[0], PN[1]])
 
     # ----------------------------------------------------------------------------------------
@@ -351,7 +367,10 @@ class Model:
     def folded_at_nodes(self) -> str | None:
         """Why the current iterate is inadmissible at the nodes, or None: the element map folds
         where det F <= 0 at a node of a cell (its vertices and, for P2, edge midpoints), which the
-        quadrature points alone can miss. One evaluation per converged increment."""
+        quadrature points alone can miss. One evaluation per converged increment; none under linear
+        kinematics (small_strain), whose geometry does not move."""
+        if self._nodal_det is None:
+            return None
         vals = compat.evaluate(self._nodal_det, self.mesh, self.rule.cells)
         worst = self.comm.allreduce(float(vals.min()) if vals.size else np.inf, op=MPI.MIN)
         if worst > 0.0:

@@ -16,6 +16,10 @@ Names (docs/theory.md section 3):
                   advanced by C:(R_mid^T sym(dH) R_mid); sigma = R s^ R^T.
 ``svk``           total-Lagrangian St Venant-Kirchhoff: S = lambda tr(E) I + 2 mu E, sigma = F S F^T / J.
 ``neo_hooke``     total-Lagrangian compressible neo-Hookean: sigma = (mu (b - I) + lambda ln J I) / J.
+``small_strain``  linear kinematics: eps = sym Grad3 u (the hoop strain u_r / r in axisymmetry),
+                  sigma = sigma_n + C:(eps - eps_n), nothing rotated; equilibrium, loads and contact
+                  tractions on the reference configuration (its ``F`` is the identity, and the model
+                  leaves out the geometric stiffness: ``geometric`` False).
 
 Plane stress: the hypoelastic updates use the reduced Lame constant on the in-plane increment, so
 sigma_zz = 0 identically; their thickness stretch is the exact integral of the elastic rate law,
@@ -71,13 +75,15 @@ class StressUpdate:
     name = ""
     incremental = True            # uses the stored stress of increment n
     rotates = True                # has a rotated old stress (can carry plasticity)
+    geometric = True              # equilibrium on the current configuration (P = sigma cof F)
 
     def __init__(self, kin: Kinematics, elastic):
         self.kin = kin
         self.elastic = elastic
 
     def F(self, u):
-        """Deformation gradient seen by the update (in plane stress the in-plane block suffices)."""
+        """Deformation gradient seen by the update (in plane stress the in-plane block suffices);
+        the loads and contact outputs take the current configuration's normals and lengths from it."""
         return self.kin.F3(u, F22=1.0) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
 
     def thickness_stretch(self, u):
@@ -220,8 +226,38 @@ class NeoHookeUpdate(StressUpdate):
         return UpdateExpr(sig, F22=F22)
 
 
+class SmallStrainUpdate(StressUpdate):
+    """Linear kinematics (docs/theory.md section 3.5): the strain eps = sym Grad3 u, the trial stress
+    sigma_n + C:(eps(u) - eps(u_n)) with the old stress not rotated (sigma_rot = sigma_n), so that an
+    elastic body has sigma = C:eps and a plastic one the small-strain return map. The geometry does
+    not move: ``F`` is the identity, which the model reads as equilibrium on the reference
+    configuration (``geometric`` False: P = sigma, no geometric stiffness), the follower pressure
+    as a dead one on the reference normal, and the contact outputs as reference lengths. In plane
+    stress the thickness strain, -lambda/(lambda + 2 mu) tr eps (elastic) or the return map's sum of
+    increments (plastic), does not enter equilibrium."""
+
+    name = "small_strain"
+    geometric = False
+
+    def F(self, u):
+        return ufl.Identity(3)
+
+    def strain(self, u):
+        """eps = sym Grad3 u (3x3; zz: u_r / r in axisymmetry, 0 in the plane models)."""
+        return ufl.sym(self.kin.grad3(u))
+
+    def build(self, u, u_n, state_n):
+        sig_n = to_tensor(state_n)
+        sig = sig_n + hooke(self.strain(u) - self.strain(u_n), self.elastic, self.kin.model)
+        return UpdateExpr(sig, sig_n)
+
+    def directional(self, u, u_n, state_n, du, up):
+        """d sigma_tr = C:eps(du); the old stress does not move (d sigma_rot = 0)."""
+        return hooke(self.strain(du), self.elastic, self.kin.model), ufl.zero(3, 3)
+
+
 UPDATES = {cls.name: cls for cls in (SRUpdate, HughesWingetUpdate, PolarUpdate, SVKUpdate,
-                                     NeoHookeUpdate)}
+                                     NeoHookeUpdate, SmallStrainUpdate)}
 
 
 def make_update(name: str, kin: Kinematics, elastic) -> StressUpdate:

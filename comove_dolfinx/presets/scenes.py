@@ -257,7 +257,8 @@ class Ring(ContactScene):
         if self.plane not in ("plane_strain", "plane_stress"):
             raise SceneError(f"plane = {self.plane!r}: choose plane_strain or plane_stress")
         if self.update not in PLASTIC_UPDATES:
-            raise SceneError(f"update = {self.update!r} cannot carry plasticity: use sr or hughes_winget")
+            raise SceneError(f"update = {self.update!r} cannot carry plasticity: use one of "
+                             f"{', '.join(PLASTIC_UPDATES)}")
         _check_small_against_E(self, "the initial yield stress", self.table().stress[0])
 
     def table(self) -> Hardening:
