@@ -218,7 +218,9 @@ class Fixed(Displacement):
 
 class Pressure(Item):
     """Follower pressure ``p`` (times the factor) on a tagged boundary: it pushes into the body, normal
-    to the current face (Nanson: t da = -p J F^-T N dA). Per unit reference thickness in plane stress."""
+    to the current face (Nanson: t da = -p J F^-T N dA), the stress update's F (under linear
+    kinematics, ``small_strain``, F = I: a dead pressure on the reference normal). Per unit reference
+    thickness in plane stress."""
 
     def __init__(self, boundary: str, p: float):
         super().__init__(boundary)

@@ -87,7 +87,8 @@ class ContactForce(Probe):
 
 
 class ContactLength(Probe):
-    """Length of the contact set in the current configuration (times ``scale``): in axisymmetry the
+    """Length of the contact set in the current configuration (the reference one under linear
+    kinematics, ``small_strain``), times ``scale``: in axisymmetry the
     radius of a contact disc around the axis."""
 
     def __init__(self, contact, name: str = "contact_length", scale: float = 1.0):

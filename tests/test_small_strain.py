@@ -97,11 +97,13 @@ def _polar(model):
     return r, srr, stt, s[:, 2]
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("kind", ["plane_strain", "axisymmetric"])
 def test_lame_thick_cylinder(cache, kind):
     """Internal pressure p = 50 on a tube a = 1, b = 2 (E = 1000, nu = 0.3: the bore grows by
-    u_r(a) / a = 9.5 %, where the geometry would matter): as a quarter of the annulus in plane strain, and as its wall r in [1, 2] in axisymmetry with the ends held (u_z = 0,
-    plane strain along the axis). Under small_strain the radial displacement at the nodes and the
+    u_r(a) / a = 9.5 %, where the geometry would matter): as a quarter of the annulus in plane
+    strain, and as its wall r in [1, 2] in axisymmetry with the ends held (u_z = 0, plane strain
+    along the axis). Under small_strain the radial displacement at the nodes and the
     stresses at the quadrature points are Lame's to the discretisation's error (P2, h = 0.1:
     measured 6e-5 of u_r(a) and 5e-3 of p in the stresses, largest at the bore; the S-R update is off
     by 15 % and 22 %); sigma_zz = nu (sigma_rr + sigma_tt)."""
@@ -129,6 +131,7 @@ def test_lame_thick_cylinder(cache, kind):
 # --------------------------------------------------------------------------------------------------
 # Hill's partly plastic hollow sphere
 # --------------------------------------------------------------------------------------------------
+@pytest.mark.mpi
 def test_hill_partly_plastic_sphere(cache):
     """A hollow sphere a = 1, b = 2 (the quarter of the annulus in the r-z plane, axisymmetric),
     elastic-perfectly plastic von Mises (sigma_0 = 10), under the internal pressure that puts the
@@ -214,8 +217,8 @@ def test_finite_strain_updates_tend_to_small_strain(cache, update):
     the order of the load squared (the geometric and material nonlinearity), so the difference falls
     with observed order 2 when s is halved (measured 1.6 % of the displacement at s = 1, 0.1 % at
     s = 1/4, orders 1.999 to 2.000 for the five updates)."""
-    d = [np.abs(_block(cache, "plane_strain", update, s) - _block(cache, "plane_strain", "small_strain", s)).max()
-         for s in (1.0, 0.5, 0.25)]
+    d = [np.abs(_block(cache, "plane_strain", update, s)
+                - _block(cache, "plane_strain", "small_strain", s)).max() for s in (1.0, 0.5, 0.25)]
     orders = np.log2(np.array(d[:-1]) / np.array(d[1:]))
     assert np.all(np.abs(orders - 2.0) < 0.02), (d, orders)
 

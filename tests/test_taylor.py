@@ -159,7 +159,8 @@ CASES = (
     # the plastic ones the return map (J2 in every model, Chen; Nitsche's facet return in plane stress)
     + [dict(kind=k, update="small_strain", method="nitsche", theta=-1, obstacle="circle", h0=1e-2)
        for k in ("plane_strain", "plane_stress", "axisymmetric")]
-    + [dict(kind=k, update="small_strain", law="j2") for k in ("plane_strain", "plane_stress", "axisymmetric")]
+    + [dict(kind=k, update="small_strain", law="j2")
+       for k in ("plane_strain", "plane_stress", "axisymmetric")]
     + [dict(update="small_strain", law="chen"),
        dict(kind="plane_stress", update="small_strain", law="j2", method="nitsche", theta=0)]
 )
