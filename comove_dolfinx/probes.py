@@ -129,12 +129,21 @@ class ContactPeak(Probe):
 
 
 class Reaction(Probe):
-    """Total force that the supports exert on a tagged boundary: ``<name>_fx``, ``<name>_fy``."""
+    """Total force that the supports of a tagged boundary (its ``Fixed`` and ``Displacement`` items)
+    exert on it: ``<name>_fx``, ``<name>_fy``, from the residual at the boundary's nodes in the
+    components those supports hold (a corner node's other component, held by a neighbouring
+    boundary's support, is that support's; Model.reaction_forces). Zero once a step released them."""
 
     def __init__(self, boundary: str, name: str | None = None):
         self.boundary = boundary
         name = name or boundary
         self.columns = (f"{name}_fx", f"{name}_fy")
+
+    def attach(self, model) -> None:
+        if not model.supports_of(self.boundary):
+            raise ProbeError(f"Reaction({self.boundary!r}): no support (Fixed, Displacement) acts on "
+                             f"boundary {self.boundary!r}; give a supported boundary (ContactForce "
+                             "gives an obstacle's force)")
 
     def __call__(self, model) -> dict:
         return dict(zip(self.columns, model.reaction(self.boundary)))
