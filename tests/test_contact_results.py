@@ -169,14 +169,16 @@ def test_square_root_edge_is_found_exactly():
 
 
 def test_holes_and_gaps():
-    """A single point without pressure inside a zone is the oscillation of a stiff penalty (one
-    zone); a gap of a whole facet's points splits the zone in two, each with its own edges; a
-    pressure that does not fall towards the edge puts it half-way."""
+    """A point without pressure inside the contact set splits it into two zones, each with its own
+    edges, and the length is theirs (the hole left out); a pressure that does not fall towards the
+    edge puts it half-way."""
     prof, ends = _synthetic(lambda x: 5.0 * np.sqrt(np.maximum(0.15 - x, 0.0)))
+    (whole,) = zones_of(prof, ends)
+    assert whole.end[0] == pytest.approx(0.15, abs=1e-12)
     prof.p[10] = 0.0
-    assert len(zones_of(prof, ends)) == 1
-    prof.p[10:14] = 0.0
     z = zones_of(prof, ends)
-    assert len(z) == 2 and prof.s[9] < z[0].s_end <= prof.s[10] and prof.s[13] < z[1].s_start < prof.s[14]
+    assert len(z) == 2 and prof.s[9] < z[0].s_end <= prof.s[10] and prof.s[10] < z[1].s_start < prof.s[11]
+    assert z[1].end[0] == pytest.approx(0.15, abs=1e-12)
+    assert z[0].length + z[1].length < whole.length
     assert edge_fraction([0.0, 0.01], [5.0, 4.0], 0.005) == 0.5           # rising towards the edge
     assert edge_fraction([0.0], [5.0], 0.005) == 0.5

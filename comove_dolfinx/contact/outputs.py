@@ -16,8 +16,8 @@ What is measured where:
   Gauss points per facet, the points where the residual evaluates the contact law), with their
   reference and current coordinates and the arc length along the boundary, sorted along the
   boundary and the same on every rank (:class:`Profile`).
-* The zone: the runs of consecutive profile points with p > 0 (joined across holes of fewer points
-  than a facet has, where a stiff penalty's pressure oscillates to zero at single points). A run that reaches the end of the
+* The zones: the runs of consecutive profile points with p > 0 (a stiff penalty, gamma0 = 1000, can
+  leave single points without pressure inside a zone: the discrete solution opens there). A run that reaches the end of the
   boundary ends at the boundary's end point (a symmetry line, say); elsewhere its edge lies between
   the last point in contact and the first one out, where the pressure reaches zero. Near the edge of
   a smooth contact p^2 falls linearly with the distance to the edge (p ~ sqrt(a - x), Hertz's
@@ -135,10 +135,10 @@ def edge_fraction(d_in: np.ndarray, p_in: np.ndarray, d_out: float) -> float:
     return float(min(max(-value / slope / d_out, 0.0), 1.0))
 
 
-def zones_of(prof: Profile, ends: list, min_gap: int = 4) -> list[Zone]:
-    """The contact zones of a profile (runs of points with p > 0 within a piece, joined across holes
-    of fewer than ``min_gap`` points): ``ends`` gives each piece's end points as ((x_start, s_start),
-    (x_end, s_end)), current coordinates and arc length."""
+def zones_of(prof: Profile, ends: list) -> list[Zone]:
+    """The contact zones of a profile (runs of points with p > 0 within a piece): ``ends`` gives
+    each piece's end points as ((x_start, s_start), (x_end, s_end)), current coordinates and arc
+    length."""
     out = []
     for k, ((x0, s0), (x1, s1)) in enumerate(ends):
         idx = np.flatnonzero(prof.piece == k)
@@ -154,13 +154,8 @@ def zones_of(prof: Profile, ends: list, min_gap: int = 4) -> list[Zone]:
             starts.insert(0, 0)
         if on[-1]:
             stops.append(len(on) - 1)
-        # a hole of fewer points than a facet has is the discrete pressure's oscillation (a stiff
-        # penalty leaves single points without pressure inside the zone), not a gap: one zone
-        keep = [0] + [k for k in range(1, len(starts)) if starts[k] - stops[k - 1] - 1 >= min_gap]
-        starts, stops = [starts[k] for k in keep], [stops[k - 1] for k in keep[1:]] + [stops[-1]]
         for a, b in zip(starts, stops):
             run = idx[a:b + 1]
-            run = run[prof.p[run] > 0.0]
             if a == 0:
                 xa, sa = np.asarray(x0, float), float(s0)
             else:
@@ -497,7 +492,7 @@ class ContactOutputs:
             s=s_all[:, g].ravel(), p=G[:, C["p"]].copy(), q=G[:, C["q"]].copy(), gap=G[:, C["gap"]].copy(),
             normal=G[:, [C["nx"], C["ny"]]].copy(), piece=np.repeat(piece, self._npts - 2))
         self._ends = ends
-        self._zones = zones_of(self._profile, ends, self._npts - 2)
+        self._zones = zones_of(self._profile, ends)
         self._peak = peak_of(self._profile, ends, self._npts - 2)
         self._profile_key = key
 
