@@ -17,16 +17,16 @@ What is measured where:
   reference and current coordinates and the arc length along the boundary, sorted along the
   boundary and the same on every rank (:class:`Profile`).
 * The zones: the runs of consecutive profile points with p > 0 (a stiff penalty, gamma0 = 1000, can
-  leave single points without pressure inside a zone: the discrete solution opens there). A run that reaches the end of the
-  boundary ends at the boundary's end point (a symmetry line, say); elsewhere its edge lies between
-  the last point in contact and the first one out, where the pressure reaches zero. Near the edge of
-  a smooth contact p^2 falls linearly with the distance to the edge (p ~ sqrt(a - x), Hertz's
-  solution and every smooth edge alike), while the discrete pressure oscillates from point to point;
-  so a straight line is fitted by least squares to p^2 at the last eight points in contact (two
-  facets) and the edge put where it reaches zero, kept between the two points (half-way when p^2
-  does not fall there, e.g. at a sharp corner). The estimate's own error is thus below the points'
-  spacing (a quarter to a third of an element); the discrete solution's zone differs from the
-  exact one by about as much (docs/api.md, "Contact results", against Hertz).
+  leave single points without pressure inside a zone: the discrete solution opens there). A run that
+  reaches the end of the boundary ends at the boundary's end point (a symmetry line, say); elsewhere
+  its edge lies between the last point in contact and the first one out, where the pressure reaches
+  zero. Near the edge of a smooth contact p^2 falls linearly with the distance to the edge
+  (p ~ sqrt(a - x), Hertz's solution and every smooth edge alike), while the discrete pressure
+  oscillates from point to point; so a straight line is fitted by least squares to p^2 at the last
+  eight points in contact (two facets) and the edge put where it reaches zero, kept between the two
+  points (half-way when p^2 does not fall there, e.g. at a sharp corner). The estimate's own error is
+  thus below the points' spacing (a quarter to a third of an element); the discrete solution's zone
+  differs from the exact one by about as much (docs/api.md, "Contact results", against Hertz).
 * The peak pressure: a parabola fitted by least squares to the pressures of the facet with the
   largest mean pressure and its two neighbours, at its largest value there (the discrete pressure
   oscillates by a few per cent from point to point where the penalty is stiff; the fit follows the
