@@ -188,3 +188,21 @@ def test_holes_and_gaps():
     assert z[0].length + z[1].length < whole.length
     assert edge_fraction([0.0, 0.01], [5.0, 4.0], 0.005) == 0.5           # rising towards the edge
     assert edge_fraction([0.0], [5.0], 0.005) == 0.5
+
+
+def test_problem_file_peak_probe(disc, tmp_path):
+    """A problem file's contact_peak probe gives the peak of the same job built in Python."""
+    from comove_dolfinx import problem
+    toml = tmp_path / "hertz.toml"
+    toml.write_text(
+        "[mesh]\nbuilder = 'quarter_disc'\nR = 1.0\nsize = 0.1\nsize_contact = 0.02\ncontact_zone = 0.2\n"
+        "[body]\nkind = 'plane_strain'\nmaterial = {E = 1000.0, nu = 0.3}\n"
+        "[[items]]\ntype = 'fixed'\nboundary = 'xsym'\ncomponent = 0\n"
+        "[[items]]\ntype = 'displacement'\nboundary = 'top'\nvalue = -0.02\ncomponent = 1\n"
+        "[[items]]\ntype = 'contact'\nname = 'flat'\nboundary = 'contact'\n"
+        "obstacle = {type = 'plane', point = [0.0, 0.0], normal = [0.0, 1.0]}\n"
+        "[[steps]]\nn = 2\n[[probes]]\ntype = 'contact_peak'\nitem = 'flat'\ncolumn = 'p_max'\n")
+    res = problem.build(problem.read(toml), MPI.COMM_WORLD).run()
+    assert res.completed, res.message
+    _, ref = _hertz_job(disc, "penalty", 100.0)
+    assert res.last["p_max"] == pytest.approx(ref.last["peak"], rel=1e-9)
