@@ -310,7 +310,7 @@ class ContactOutputs:
         s1 = fem.locate_dofs_topological(S1, fdim, facets)
         self._s1dofs = s1[s1 < S1.dofmap.index_map.size_local]
         self._p1_to_s = self._p1_interpolation(S, S1, ctx.degree)
-        self._fields_key = None
+        self._fields_key, self._depends = None, {}
         self._profile_setup(ctx, facets, stretch, N)
 
     # -- forms ----------------------------------------------------------------------------------
@@ -326,17 +326,16 @@ class ContactOutputs:
         compat.assemble_vector(vec, form)
         return vec.array.copy()
 
-    def _stale(self, last_key, exprs) -> tuple[bool, tuple]:
+    def _stale(self, last_key, name: str, exprs) -> tuple[bool, tuple]:
         """(whether anything that ``exprs`` depend on changed since ``last_key`` on any rank, the
-        new key): the values of their functions and constants. Collective."""
-        key = []
-        for e in exprs:
-            for c in extract_coefficients(e):
-                key.append(hash(c.x.array.tobytes()))
-            for c in extract_type(e, ufl.Constant):
-                if c is not self._nref:
-                    key.append(np.asarray(c.value).tobytes())
-        key = tuple(key)
+        new key): the values of their functions and constants (found once, under ``name``).
+        Collective."""
+        if name not in self._depends:
+            funcs = {id(c): c for e in exprs for c in extract_coefficients(e)}
+            consts = {id(c): c for e in exprs for c in extract_type(e, ufl.Constant) if c is not self._nref}
+            self._depends[name] = (list(funcs.values()), list(consts.values()))
+        funcs, consts = self._depends[name]
+        key = tuple(hash(f.x.array.tobytes()) for f in funcs) + tuple(np.asarray(c.value).tobytes() for c in consts)
         return bool(self.comm.allreduce(key != last_key, op=MPI.LOR)), key
 
     # -- nodal fields ---------------------------------------------------------------------------
@@ -346,7 +345,7 @@ class ContactOutputs:
         zero) onto the boundary's vertices, interpolated onto the boundary field space. Recomputed
         only when something they depend on changed. Collective."""
         names = [n for n in ("p", "q") if n in self.ufl]
-        stale, key = self._stale(self._fields_key, [self.ufl[n] for n in names])
+        stale, key = self._stale(self._fields_key, "fields", [self.ufl[n] for n in names])
         if not stale:
             return
         m, b, g = self._lumped1, self._s1dofs, self._f1
@@ -464,7 +463,7 @@ class ContactOutputs:
         return self._profile
 
     def _refresh_profile(self) -> None:
-        stale, key = self._stale(self._profile_key, [self._pexpr_ufl])
+        stale, key = self._stale(self._profile_key, "profile", [self._pexpr_ufl])
         if not stale:
             return
         D = self._evaluate()
