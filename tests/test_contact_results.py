@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from comove_dolfinx.contact.outputs import Profile, edge_fraction, gauss_points, peak_of, zones_of
+from comove_dolfinx.contact.outputs import ContactProfile, edge_fraction, gauss_points, peak_of, zones_of
 from comove_dolfinx.probes import ProbeError
 
 R, E, NU, DEPTH, H = 1.0, 1000.0, 0.3, 0.02, 0.02
@@ -155,8 +155,8 @@ def _synthetic(pressure, L=0.2, h=0.02, n=4):
     """A flat boundary 0 <= x <= L of facets h with n Gauss points each, pressure(x) at the points."""
     x = (np.arange(int(round(L / h)))[:, None] * h + h * gauss_points(n)[None, :]).ravel()
     P = np.c_[x, np.zeros_like(x)]
-    prof = Profile(X=P, x=P, S=x, s=x, p=pressure(x), q=0 * x, gap=0 * x, normal=np.tile([0.0, 1.0], (len(x), 1)),
-                   piece=np.zeros(len(x), dtype=np.int64))
+    prof = ContactProfile(X=P, x=P, S=x, s=x, p=pressure(x), q=0 * x, gap=0 * x,
+                          normal=np.tile([0.0, 1.0], (len(x), 1)), piece=np.zeros(len(x), dtype=np.int64))
     return prof, [((np.zeros(2), 0.0), (np.array([L, 0.0]), L))]
 
 

@@ -291,12 +291,14 @@ class Contact(Item):
 
     def profile(self):
         """Pressure, shear and gap at the facet quadrature points, sorted along the boundary, with
-        reference and current coordinates and arc length (contact/outputs.py, ``Profile``; the
+        reference and current coordinates and arc length (contact/outputs.py, ``ContactProfile``; the
         same on every rank). Collective."""
         return self.outputs.profile()
 
     def peak_pressure(self) -> float:
-        """The largest contact pressure per current area at the quadrature points. Collective."""
+        """The peak contact pressure per current area: a parabola fitted to the quadrature points'
+        pressures over the facet of the largest mean pressure and its neighbours (contact/outputs.py;
+        0 without contact). Collective."""
         return self.outputs.peak_pressure()
 
     def stick_slip(self) -> tuple[float, float]:

@@ -15,7 +15,7 @@ What is measured where:
 * The profile: pressure, shear and gap at the facet quadrature points of the contact boundary (four
   Gauss points per facet, the points where the residual evaluates the contact law), with their
   reference and current coordinates and the arc length along the boundary, sorted along the
-  boundary and the same on every rank (:class:`Profile`).
+  boundary and the same on every rank (:class:`ContactProfile`).
 * The zones: the runs of consecutive profile points with p > 0 (a stiff penalty, gamma0 = 1000, can
   leave single points without pressure inside a zone: the discrete solution opens there). A run that
   reaches the end of the boundary ends at the boundary's end point (a symmetry line, say); elsewhere
@@ -69,7 +69,7 @@ def gauss_points(n: int) -> np.ndarray:
 
 
 @dataclass
-class Profile:
+class ContactProfile:
     """The contact boundary's quadrature points, sorted along the boundary (numpy arrays, n points).
 
     Attributes
@@ -135,7 +135,7 @@ def edge_fraction(d_in: np.ndarray, p_in: np.ndarray, d_out: float) -> float:
     return float(min(max(-value / slope / d_out, 0.0), 1.0))
 
 
-def zones_of(prof: Profile, ends: list) -> list[Zone]:
+def zones_of(prof: ContactProfile, ends: list) -> list[Zone]:
     """The contact zones of a profile (runs of points with p > 0 within a piece): ``ends`` gives
     each piece's end points as ((x_start, s_start), (x_end, s_end)), current coordinates and arc
     length."""
@@ -168,7 +168,7 @@ def zones_of(prof: Profile, ends: list) -> list[Zone]:
     return out
 
 
-def _edge(prof: Profile, inside: np.ndarray, i_out: int) -> tuple[np.ndarray, float]:
+def _edge(prof: ContactProfile, inside: np.ndarray, i_out: int) -> tuple[np.ndarray, float]:
     """The edge between ``inside[0]``, the last point in contact (``inside``: it and the ones
     before it), and the first point out ``i_out``."""
     s, i_in = prof.s, inside[0]
@@ -176,7 +176,7 @@ def _edge(prof: Profile, inside: np.ndarray, i_out: int) -> tuple[np.ndarray, fl
     return (prof.x[i_in] + t * (prof.x[i_out] - prof.x[i_in]), float(s[i_in] + t * (s[i_out] - s[i_in])))
 
 
-def peak_of(prof: Profile, ends: list, npoints: int) -> float:
+def peak_of(prof: ContactProfile, ends: list, npoints: int) -> float:
     """The peak pressure of a profile (``npoints`` points per facet): a parabola fitted by least
     squares to the pressures in contact on the facet of the largest mean pressure and its two
     neighbours, at its largest value within them (or at the end of the boundary they reach); the
@@ -456,9 +456,9 @@ class ContactOutputs:
             local[sel] = vals[:, k * npt:(k + 1) * npt]
         return np.concatenate(self.comm.allgather(local))
 
-    def profile(self) -> Profile:
+    def profile(self) -> ContactProfile:
         """The pressure, shear and gap at the quadrature points of the contact boundary, sorted along
-        it (:class:`Profile`; the same on every rank). Collective."""
+        it (:class:`ContactProfile`; the same on every rank). Collective."""
         self._refresh_profile()
         return self._profile
 
@@ -486,7 +486,7 @@ class ContactOutputs:
             S0, s0 = S_all[rows[-1], -1], s_all[rows[-1], -1]
         g = slice(1, self._npts - 1)                  # the Gauss points
         G = D[:, g].reshape(-1, D.shape[2])
-        self._profile = Profile(
+        self._profile = ContactProfile(
             X=G[:, [C["X"], C["Y"]]].copy(), x=G[:, [C["x"], C["y"]]].copy(), S=S_all[:, g].ravel(),
             s=s_all[:, g].ravel(), p=G[:, C["p"]].copy(), q=G[:, C["q"]].copy(), gap=G[:, C["gap"]].copy(),
             normal=G[:, [C["nx"], C["ny"]]].copy(), piece=np.repeat(piece, self._npts - 2))
