@@ -91,9 +91,10 @@ class ContactLength(Probe):
     """Current length of the contact set (times ``scale``): the arc length between the edges of each
     connected contact zone, summed, where an edge is where the pressure at the facet quadrature points
     reaches zero (contact/outputs.py: interpolated between the last point in contact and the first one
-    out; a zone that reaches the end of the boundary, e.g. a symmetry line, ends there). In axisymmetry,
-    with the boundary starting at the axis, the radius of the contact disc. Accuracy against Hertz's
-    half-width: docs/api.md, "Contact results"."""
+    out; a zone that reaches the end of the boundary, e.g. a symmetry line, ends there); the reference
+    arc length under linear kinematics (``small_strain``). In axisymmetry, with the boundary starting
+    at the axis, the radius of the contact disc. Accuracy against Hertz's half-width: docs/api.md,
+    "Contact results"."""
 
     def __init__(self, contact, name: str = "contact_length", scale: float = 1.0):
         self.contact, self.scale, self.columns = contact, scale, (name,)

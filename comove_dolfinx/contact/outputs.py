@@ -78,7 +78,8 @@ class ContactProfile:
         Reference and current coordinates.
     S, s : (n,)
         Reference and current arc length from the start of the boundary (a boundary of several
-        pieces: one after the other, without a gap).
+        pieces: one after the other, without a gap); under linear kinematics (``small_strain``)
+        s is the reference one, as every length there.
     p, q : (n,)
         Contact pressure (>= 0) and tangential traction along t_o, per unit current area.
     gap : (n,)
@@ -438,6 +439,8 @@ class ContactOutputs:
         self._pexpr_ufl = ufl.as_vector([ctx.x[0], ctx.x[1], x[0], x[1], p, q, obs.gap(x), n_o[0], n_o[1]])
         self._pexpr = None
         self._order = None
+        # linear kinematics (an update whose ``geometric`` is False) measures lengths on the reference
+        self._geometric = bool(getattr(ctx.update, "geometric", True))
         self._profile_key, self._profile = None, None
 
     def _evaluate(self) -> np.ndarray:
@@ -475,9 +478,10 @@ class ContactOutputs:
         D[flipped] = D[flipped, ::-1]
         ends, S_all, s_all = [], np.zeros(D.shape[:2]), np.zeros(D.shape[:2])
         S0 = s0 = 0.0
+        ref, cur = (C["X"], C["Y"]), ((C["x"], C["y"]) if self._geometric else (C["X"], C["Y"]))
         for k in range(int(piece.max()) + 1 if piece.size else 0):
             rows = np.flatnonzero(piece == k)
-            for col, out, base in (((C["X"], C["Y"]), S_all, S0), ((C["x"], C["y"]), s_all, s0)):
+            for col, out, base in ((ref, S_all, S0), (cur, s_all, s0)):
                 P = D[rows][:, :, list(col)].reshape(-1, 2)
                 seg = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
                 out[rows] = (base + seg).reshape(len(rows), -1)
