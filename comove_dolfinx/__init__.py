@@ -32,7 +32,8 @@ _API = {
     "contact": ("Contact", "Plane", "Circle", "Profile", "ContactError"),
     "job": ("Step", "Job", "Results", "JobError"),
     "solver": ("NewtonSettings",),
-    "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "Reaction", "MaxPlasticStrain", "Value"),
+    "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "ContactPeak",
+               "Reaction", "MaxPlasticStrain", "Value"),
     "io": ("Writer", "HistoryCSV", "VTK", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),
     "presets": ("get_scene", "SCENES"),
 }

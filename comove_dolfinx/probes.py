@@ -8,6 +8,7 @@ the same values. A job's history is the increment's step and load columns follow
     cm.NodeDisplacement("centre", (0.0, 0.0), component=1, column="center_uz")
     cm.ContactForce(contact, "force", component=1, scale=-2.0)   # symmetry: twice the quarter's
     cm.ContactLength(contact, "contact_width", scale=2.0)
+    cm.ContactPeak(contact, "p_max")                  # the largest contact pressure
     cm.Reaction("left")                               # left_fx, left_fy: the supports' force
     cm.MaxPlasticStrain()
     cm.Value("crown_gap", lambda model: ...)          # anything else, from the model
@@ -87,9 +88,13 @@ class ContactForce(Probe):
 
 
 class ContactLength(Probe):
-    """Length of the contact set in the current configuration (the reference one under linear
-    kinematics, ``small_strain``), times ``scale``: in axisymmetry the
-    radius of a contact disc around the axis."""
+    """Current length of the contact set (times ``scale``): the arc length between the edges of each
+    connected contact zone, summed, where an edge is where the pressure at the facet quadrature points
+    reaches zero (contact/outputs.py: interpolated between the last point in contact and the first one
+    out; a zone that reaches the end of the boundary, e.g. a symmetry line, ends there); the reference
+    arc length under linear kinematics (``small_strain``). In axisymmetry, with the boundary starting
+    at the axis, the radius of the contact disc. Accuracy against Hertz's half-width: docs/api.md,
+    "Contact results"."""
 
     def __init__(self, contact, name: str = "contact_length", scale: float = 1.0):
         self.contact, self.scale, self.columns = contact, scale, (name,)
@@ -99,9 +104,10 @@ class ContactLength(Probe):
 
 
 class ContactEdges(Probe):
-    """Where the contact set begins and ends: the smallest and largest current coordinate ``axis``
-    of the contact boundary's nodes that carry pressure (``<name>_min``, ``<name>_max``; NaN
-    without contact)."""
+    """Where the contact set begins and ends: the smallest and largest current coordinate ``axis`` of
+    the contact zones' edges (``<name>_min``, ``<name>_max``; NaN without contact), each edge found
+    as for :class:`ContactLength` (between the last quadrature point in contact and the first one out,
+    or the boundary's end)."""
 
     def __init__(self, contact, name: str = "contact_edge", axis: int = 0):
         self.contact, self.axis = contact, axis
@@ -111,13 +117,34 @@ class ContactEdges(Probe):
         return dict(zip(self.columns, self.contact.zone_edges(self.axis)))
 
 
+class ContactPeak(Probe):
+    """The largest contact pressure per current area (times ``scale``; one column ``name``): the
+    largest value at the facet quadrature points, where the contact law is evaluated (0 without
+    contact). Accuracy against Hertz's peak: docs/api.md, "Contact results"."""
+
+    def __init__(self, contact, name: str = "peak_pressure", scale: float = 1.0):
+        self.contact, self.scale, self.columns = contact, scale, (name,)
+
+    def __call__(self, model) -> dict:
+        return {self.columns[0]: self.scale * self.contact.peak_pressure()}
+
+
 class Reaction(Probe):
-    """Total force that the supports exert on a tagged boundary: ``<name>_fx``, ``<name>_fy``."""
+    """Total force that the supports of a tagged boundary (its ``Fixed`` and ``Displacement`` items)
+    exert on it: ``<name>_fx``, ``<name>_fy``, from the residual at the boundary's nodes in the
+    components those supports hold (a corner node's other component, held by a neighbouring
+    boundary's support, is that support's; Model.reaction_forces). Zero once a step released them."""
 
     def __init__(self, boundary: str, name: str | None = None):
         self.boundary = boundary
         name = name or boundary
         self.columns = (f"{name}_fx", f"{name}_fy")
+
+    def attach(self, model) -> None:
+        if not model.supports_of(self.boundary):
+            raise ProbeError(f"Reaction({self.boundary!r}): no support (Fixed, Displacement) acts on "
+                             f"boundary {self.boundary!r}; give a supported boundary (ContactForce "
+                             "gives an obstacle's force)")
 
     def __call__(self, model) -> dict:
         return dict(zip(self.columns, model.reaction(self.boundary)))

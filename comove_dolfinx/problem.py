@@ -32,7 +32,7 @@
     [newton]                     # any NewtonSettings field
     scale = "force"
 
-    [[probes]]                   # node, contact_force, contact_length, reaction, max_plastic_strain
+    [[probes]]                   # node, contact_force, contact_length, contact_peak, reaction, max_plastic_strain
     type = "contact_force"
     item = "plate"
     column = "force"
@@ -73,6 +73,7 @@ OPTIONAL = ("motion", "spacing")
 PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": str},
           "contact_force": {"item": str, "column": str, "component": int, "scale": float},
           "contact_length": {"item": str, "column": str, "scale": float},
+          "contact_peak": {"item": str, "column": str, "scale": float},
           "reaction": {"boundary": str, "name": str},
           "max_plastic_strain": {}}
 NEWTON = {"rtol": float, "atol": float, "stol": float, "max_it": int, "divergence": float, "backtracks": int,
@@ -274,6 +275,9 @@ def build(data: dict, comm, writers=()):
         elif kind == "contact_length":
             plist.append(probes.ContactLength(named[s["item"]], s.get("column", "contact_length"),
                                               s.get("scale", 1.0)))
+        elif kind == "contact_peak":
+            plist.append(probes.ContactPeak(named[s["item"]], s.get("column", "peak_pressure"),
+                                            s.get("scale", 1.0)))
         elif kind == "reaction":
             plist.append(probes.Reaction(s["boundary"], s.get("name")))
         else:

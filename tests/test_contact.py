@@ -301,11 +301,11 @@ def test_boundary_fields_interpolate_like_dolfinx(tmp_path_factory, degree):
     c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)))
     m = Model(Body(md, "plane_strain", Elastic(E, NU), degree=degree), [Fixed("top"), c])
     m.finalize()
-    g = c._f1
+    g = c.outputs._f1
     g.x.array[:] = np.random.default_rng(3).random(g.x.array.size)
     expect = c.pressure.copy()
     expect.interpolate(g)
-    dofs, a, b = c._p1_to_s
+    dofs, a, b = c.outputs._p1_to_s
     got = np.full_like(expect.x.array, np.nan)
     got[dofs] = 0.5 * (g.x.array[a] + g.x.array[b])
     assert np.abs(got - expect.x.array).max() <= 1e-15

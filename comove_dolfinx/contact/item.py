@@ -11,9 +11,10 @@ evaluated from the converged state u_lag was solved from (a FacetBase), not from
 The penalty friction keeps its stick part e_n as a boundary field (a lumped projection at each
 converged increment); Nitsche's lives in the stress.
 
-Results: the force from the residual (F . e = -R_c(u; e) for the constant fields e_x, e_y), the extent
-(current length of the boundary where the pressure is positive, at the facet quadrature points), the
-largest nodal penetration, the lengths that stick and slip, and nodal fields of pressure and shear.
+Results: the force from the residual (F . e = -R_c(u; e) for the constant fields e_x, e_y), here;
+the contact zone, its edges, the pressure profile at the quadrature points, the peak pressure, the
+largest nodal penetration, the lengths that stick and slip and the nodal fields of pressure and shear
+in contact/outputs.py (``Contact.outputs``), which the item's methods of those names hand over to.
 """
 from __future__ import annotations
 
@@ -30,6 +31,7 @@ from ..loads import Item
 from ..names import CONTACT_METHODS as METHODS
 from . import laws
 from .obstacles import ContactError, Obstacle
+from .outputs import ContactOutputs
 
 FACET_DEGREE = 7          # 4 Gauss points per facet
 
@@ -38,7 +40,7 @@ FACET_DEGREE = 7          # 4 Gauss points per facet
 class ZoneInfo:
     """The contact set in the current configuration."""
 
-    extent: float              # length in contact along the boundary (current configuration)
+    extent: float              # current length of the contact set, between its edges (outputs.py)
     max_penetration: float     # largest -g over the nodes of the contact boundary (0 if none)
 
     @property
@@ -205,109 +207,37 @@ class Contact(Item):
         change = self.comm.allreduce(float(np.abs(p_new - p_old).max()) / scale, op=MPI.MAX)
         return change > self.relag_tol
 
-    # -- results ------------------------------------------------------------------------------------
+    # -- results (contact/outputs.py) ----------------------------------------------------------------
     def _build_outputs(self, ctx):
-        """The forms of the results (compiled on first use: a run that never asks for one does not
-        pay its compilation)."""
-        msh = ctx.mesh
-        self._e = fem.Constant(msh, PETSc.ScalarType((0.0, 0.0)))
-        S = compat.function_space(msh, "Lagrange", ctx.degree)
-        phi = ufl.TestFunction(S)
-        # pressure and shear are projected with linear weights (non-negative hat functions), so a
-        # pressure that the law keeps >= 0 stays >= 0 at the nodes; then interpolated onto S
-        S1 = compat.function_space(msh, "Lagrange", 1)
-        phi1 = ufl.TestFunction(S1)
-        F = ctx.update.F(ctx.u)
-        N = ufl.FacetNormal(msh)
-        N3 = ufl.as_vector([N[0], N[1], 0.0])
-        stretch = ufl.sqrt(ufl.dot(ufl.det(F) * ufl.inv(F).T * N3, ufl.det(F) * ufl.inv(F).T * N3))
-        # current length of the contact set: in-plane stretch of the boundary where p > 0 (none
-        # under linear kinematics, whose lengths are the reference ones)
-        F2 = ufl.Identity(2) + ufl.grad(ctx.u) if ctx.update.geometric else ufl.Identity(2)
-        T = ufl.as_vector([-N[1], N[0]])
-        chi = ufl.conditional(ufl.gt(self.p_ref, 0.0), 1.0, 0.0)
-        dsc = self.ds_c
-        self._ufl = {"force": -ufl.replace(self.R_c, {ctx.v: self._e}), "mass": phi * dsc,
-                     "mass1": phi1 * dsc, "extent": chi * ufl.sqrt(ufl.dot(F2 * T, F2 * T)) * dsc,
-                     "p": self.p_ref / stretch * phi1 * dsc}
-        if self.mu > 0:
-            # reference length of the contact set that slips (friction at its threshold) and sticks
-            slipping = ufl.conditional(self._slipping, 1.0, 0.0)
-            self._ufl.update(slip=chi * slipping * dsc, stick=chi * (1.0 - slipping) * dsc,
-                             q=self.q_ref / stretch * phi1 * dsc, p_lag=self._p_lag * phi * dsc,
-                             lag_force=self._p_lag * ufl.dot(self._n_lag, self._e) * ctx.weight * dsc)
-            if self.method == "penalty":
-                self._ufl["e"] = self._e_new * phi * dsc
-        self._compiled = {}
-        if "e" in self._ufl:            # every commit needs it: compiled with the model's forms
-            self._form("e")
-        self.pressure = fem.Function(S, name="contact_pressure")
-        self.shear = fem.Function(S, name="contact_shear")
-        self._vec = compat.create_vector(self._form("mass"))
-        self._lumped = self._assemble_vec(self._form("mass"))
-        self._f1 = fem.Function(S1)
-        self._vec1 = compat.create_vector(self._form("mass1"))
-        self._lumped1 = self._assemble_vec(self._form("mass1"), self._vec1)
-        # nodes of the contact boundary (owned), for the contact zone
-        fdim = msh.topology.dim - 1
-        facets = ctx.facets(self.boundary)
-        dofs = fem.locate_dofs_topological(ctx.V.sub(0), fdim, facets)   # unrolled indices of V
-        nodes = np.unique(dofs // ctx.V.dofmap.index_map_bs)
-        self._nodes = nodes[nodes < ctx.V.dofmap.index_map.size_local]   # owned nodes only
-        self._X = ctx.V.tabulate_dof_coordinates()[self._nodes, :2]
-        sdofs = fem.locate_dofs_topological(S, fdim, facets)
-        self._sdofs = sdofs[sdofs < S.dofmap.index_map.size_local]
-        self._off = np.ones(S.dofmap.index_map.size_local + S.dofmap.index_map.num_ghosts, dtype=bool)
-        self._off[sdofs] = False                     # dofs away from the contact boundary
-        # the boundary field's dof at each of the boundary's nodes (same points, matched by position
-        # among the boundary's dofs, ghosts included)
-        XS = np.round(S.tabulate_dof_coordinates()[sdofs, :2], 12).tolist()
-        key = {tuple(x): int(d) for x, d in zip(XS, sdofs)}
-        self._node_sdof = np.array([key.get(tuple(x), -1) for x in np.round(self._X, 12).tolist()], dtype=np.int64)
-        s1 = fem.locate_dofs_topological(S1, fdim, facets)
-        self._s1dofs = s1[s1 < S1.dofmap.index_map.size_local]
-        self._p1_to_s = self._p1_interpolation(S, S1, ctx.degree)
+        """The results' forms and fields (contact/outputs.py), compiled on first use."""
+        self.outputs = ContactOutputs(self, ctx)
 
-    @staticmethod
-    def _p1_interpolation(S, S1, degree: int):
-        """(dofs of S, the two P1 dofs whose mean is their value) for the interpolation of a P1
-        field into the boundary fields' space S (P1 or P2: a vertex takes its value, an edge's
-        midpoint the mean of the edge's ends), in numpy: dolfinx's interpolation between two spaces
-        cost as much as the rest of the output. None for other degrees."""
-        if degree not in (1, 2):
-            return None
-        tdim = S.mesh.topology.dim
-        imap = S.mesh.topology.index_map(tdim)
-        n = imap.size_local + imap.num_ghosts
-        cs, c1 = compat.cell_dofs(S, n), compat.cell_dofs(S1, n)
-        # the P2 triangle's dofs: the vertices, then the edges opposite vertices 0, 1 and 2
-        ends = [(0, 0), (1, 1), (2, 2)] + ([(1, 2), (0, 2), (0, 1)] if degree == 2 else [])
-        dofs = np.concatenate([cs[:, k] for k in range(len(ends))])
-        a = np.concatenate([c1[:, i] for i, _ in ends])
-        b = np.concatenate([c1[:, j] for _, j in ends])
-        return dofs, a, b
+    # what the item's own methods use of the results' forms, handed over to them
+    _FROM_OUTPUTS = frozenset({"_e", "_ufl", "_vec", "_lumped", "_sdofs", "_X", "_nodes"})
+    _RENAMED = {"_ufl": "ufl"}
+
+    def __getattr__(self, name):
+        if name in Contact._FROM_OUTPUTS and "outputs" in self.__dict__:
+            return getattr(self.__dict__["outputs"], Contact._RENAMED.get(name, name))
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def nodes(self) -> np.ndarray:
         """The contact boundary's owned nodes (numbering of the displacement's blocked dofs)."""
-        return self._nodes
+        return self.outputs._nodes
 
     @property
     def node_sdof(self) -> np.ndarray:
         """The dof of the boundary fields (``pressure``, ``shear``) at each of ``nodes`` (-1: none)."""
-        return self._node_sdof
+        return self.outputs._node_sdof
 
     def _form(self, name: str):
         """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
-        if name not in self._compiled:
-            self._compiled[name] = fem.form(self._ufl[name])
-        return self._compiled[name]
+        return self.outputs.form(name)
 
     def _assemble_vec(self, form, vec=None) -> np.ndarray:
         """Owned entries of an assembled linear form on the boundary field space (or ``vec``'s)."""
-        vec = self._vec if vec is None else vec
-        compat.assemble_vector(vec, form)
-        return vec.array.copy()
+        return self.outputs.assemble_vec(form, vec)
 
     def check_start(self) -> None:
         """ContactError if the body already penetrates the obstacle in its initial state."""
@@ -337,57 +267,52 @@ class Contact(Item):
                 out[i] = self.comm.allreduce(fem.assemble_scalar(self._form("lag_force")), op=MPI.SUM)
         return out
 
+    @property
+    def pressure(self):
+        """Contact pressure per current area as a boundary field (a Function of the displacement's
+        degree, zero away from the boundary; contact/outputs.py): current whenever it is read, with
+        or without a writer. Collective."""
+        return self.outputs.field("pressure")
+
+    @property
+    def shear(self):
+        """Tangential traction along t_o per current area as a boundary field, like ``pressure``
+        (zero without friction). Collective."""
+        return self.outputs.field("shear")
+
     def update_fields(self) -> None:
-        """Contact pressure and tangential traction (per current area) as boundary fields: lumped
-        projections with the linear hat functions (weights >= 0: the pressure never goes below
-        zero) onto the boundary's vertices, interpolated onto the boundary field space."""
-        m, b, g = self._lumped1, self._s1dofs, self._f1
-        for name, f in (("p", self.pressure), ("q", self.shear)):
-            if name not in self._ufl:
-                continue
-            vals = self._assemble_vec(self._form(name), self._vec1)
-            g.x.array[:] = 0.0
-            g.x.array[b] = vals[b] / m[b]
-            g.x.scatter_forward()
-            if self._p1_to_s is None:
-                f.interpolate(g)
-            else:
-                dofs, ea, eb = self._p1_to_s
-                f.x.array[dofs] = 0.5 * (g.x.array[ea] + g.x.array[eb])
-            f.x.array[self._off] = 0.0                # the interpolation reaches into the cells
-            f.x.scatter_forward()
+        """Bring ``pressure`` and ``shear`` up to date (reading them does it too). Collective."""
+        self.outputs.update_fields()
 
     def boundary_values(self, f) -> tuple[np.ndarray, np.ndarray]:
-        """(reference coordinates, values) of a scalar output field (e.g. ``pressure``) at every node
-        of the contact boundary, gathered on all ranks."""
-        X = f.function_space.tabulate_dof_coordinates()[self._sdofs, :2]
-        return (np.concatenate(self.comm.allgather(X)),
-                np.concatenate(self.comm.allgather(f.x.array[self._sdofs])))
+        """(reference coordinates, values) of a boundary field at every node of the contact
+        boundary, gathered on all ranks: ``f`` is ``"pressure"``, ``"shear"`` or the Function."""
+        return self.outputs.boundary_values(f)
+
+    def profile(self):
+        """Pressure, shear and gap at the facet quadrature points, sorted along the boundary, with
+        reference and current coordinates and arc length (contact/outputs.py, ``ContactProfile``; the
+        same on every rank). Collective."""
+        return self.outputs.profile()
+
+    def peak_pressure(self) -> float:
+        """The peak contact pressure per current area: a parabola fitted to the quadrature points'
+        pressures over the facet of the largest mean pressure and its neighbours (contact/outputs.py;
+        0 without contact). Collective."""
+        return self.outputs.peak_pressure()
 
     def stick_slip(self) -> tuple[float, float]:
         """Reference lengths of the contact set where friction sticks and where it slips (zeros
         without friction), at the current iterate."""
-        if "slip" not in self._ufl:
-            return 0.0, 0.0
-        return tuple(self.comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM)
-                     for f in (self._form("stick"), self._form("slip")))
+        return self.outputs.stick_slip()
 
     def zone_edges(self, axis: int = 0) -> tuple[float, float]:
-        """Smallest and largest current coordinate ``axis`` of the boundary's nodes that carry
-        contact pressure (NaN, NaN without contact): where the contact set begins and ends."""
-        self.update_fields()
-        ok = self._node_sdof >= 0
-        p = np.zeros(len(self._nodes))
-        p[ok] = self.pressure.x.array[self._node_sdof[ok]]
-        x = (self._X + self.u.x.array.reshape(-1, 2)[self._nodes])[p > 0, axis]
-        lo = self.comm.allreduce(float(x.min()) if x.size else np.inf, op=MPI.MIN)
-        hi = self.comm.allreduce(float(x.max()) if x.size else -np.inf, op=MPI.MAX)
-        return (lo, hi) if np.isfinite(lo) else (np.nan, np.nan)
+        """Smallest and largest current coordinate ``axis`` of the contact set's edges, where the
+        pressure at the quadrature points reaches zero (contact/outputs.py; NaN, NaN without
+        contact). Collective."""
+        return self.outputs.zone_edges(axis)
 
     def zone(self) -> ZoneInfo:
-        """Contact extent (from the facet quadrature points) and the largest nodal penetration."""
-        extent = self.comm.allreduce(fem.assemble_scalar(self._form("extent")), op=MPI.SUM)
-        x = self._X + self.u.x.array.reshape(-1, 2)[self._nodes]
-        g = self.obstacle.gap_np(x, self.obstacle.displacement(self.factor))
-        pen = self.comm.allreduce(float(max(-g.min(), 0.0)) if g.size else 0.0, op=MPI.MAX)
-        return ZoneInfo(float(extent), pen)
+        """The contact set's current length (between its edges, contact/outputs.py) and the largest
+        nodal penetration. Collective."""
+        return ZoneInfo(self.outputs.extent(), self.outputs.max_penetration())

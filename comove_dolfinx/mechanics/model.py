@@ -473,10 +473,17 @@ class Model:
         """Cauchy stress at the points of the current iterate, shape (points, 4)."""
         return self.rule.view(self.state.sigma)
 
+    def supports_of(self, name: str) -> list:
+        """The supports (items of kind "support") of the tagged boundary ``name``, released or not."""
+        return [it for it in self.items if it.kind == "support" and getattr(it, "boundary", None) == name]
+
     def reaction_forces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """Reference positions (n, 2) and forces (n, 2) that the supports exert on the nodes of a
-        tagged boundary (this rank's owned nodes), from the residual at the current state
-        (:meth:`_support_forces`; zero once a step released the support)."""
+        """Reference positions (n, 2) and forces (n, 2) that the supports of a tagged boundary exert
+        on its nodes (this rank's owned nodes), from the residual at the current state
+        (:meth:`_support_forces`), in the components that those supports hold; zero in the others
+        (at a corner node, the residual in a component that another boundary's support holds is
+        that support's force) and once a step released them. Where supports of two boundaries hold
+        the same component of a corner node, that node's force counts for both."""
         R = self._support_forces()
         fdim = self.mesh.topology.dim - 1
         ft = self.meshdata.facet_tags
@@ -485,11 +492,16 @@ class Model:
         bs = self.V.dofmap.index_map_bs
         nodes = np.unique(dofs // bs)
         nodes = nodes[nodes < self.V.dofmap.index_map.size_local]
-        f = R.reshape(-1, bs)[nodes]
+        bcs = [bc for it in self.supports_of(name) for bc in it.bcs]
+        work = compat.create_vector(self.residual_form)
+        held = compat.constrained(work, bcs).reshape(-1, bs) if bcs else np.zeros((R.size // bs, bs), bool)
+        work.destroy()
+        f = np.where(held[nodes], R.reshape(-1, bs)[nodes], 0.0)
         return self.V.tabulate_dof_coordinates()[nodes, :2], f
 
     def reaction(self, name: str) -> np.ndarray:
-        """Total force (x, y) that the supports exert on a tagged boundary (all ranks)."""
+        """Total force (x, y) that the supports of a tagged boundary exert on it (all ranks;
+        :meth:`reaction_forces`)."""
         return self.comm.allreduce(self.reaction_forces(name)[1].sum(axis=0), op=MPI.SUM)
 
     def num_dofs(self) -> int:
