@@ -112,7 +112,8 @@ def test_homogeneous_bar_follows_the_law(mpi_tmp):
     f_disc, r_disc = necking.homogeneous(u, n_steps=n)
     assert force == pytest.approx(f_disc, rel=1e-7)
     assert radius == pytest.approx(r_disc, rel=1e-9)
-    assert res["end_fy"][-1] > 1.5 * necking.SIGMA0 * math.pi * necking.R ** 2 * 0.9   # well into hardening
+    # well into the saturation term's curvature: the true stress at the end is 1.43 sigma0 (delta p = 1.2)
+    assert force[-1] / (math.pi * radius[-1] ** 2) > 1.4 * necking.SIGMA0
 
 
 def test_discrete_homogeneous_solution_tends_to_the_closed_form():
@@ -160,8 +161,12 @@ def test_calculix_deck_and_table():
     assert np.abs(np.interp(fine, p, s) - necking.yield_stress(fine)).max() > 0.5e-5   # the bound is near
 
 
-def test_case_on_the_coarse_mesh(tmp_path):
-    checks = necking.run(tmp_path, small=True)
+@pytest.mark.mpi
+def test_case_on_the_coarse_mesh(mpi_tmp):
+    """3 x 16 cells, 140 increments against CalculiX on 5 x 40 at 560: 1.0 % in the neck radius at
+    6 mm, 0.5 % in the force (measured, serial and on two ranks alike), within the case's 1.5 %."""
+    checks = necking.run(mpi_tmp, small=True)
     assert checks and all(c.ok for c in checks), "\n".join(
         f"{c.quantity}: {c.result} vs {c.reference} ({c.error:.3g} > {c.tolerance})" for c in checks if not c.ok)
-    assert (tmp_path / "necking.png").is_file()
+    MPI.COMM_WORLD.barrier()
+    assert (mpi_tmp / "necking.png").is_file()

@@ -287,11 +287,13 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     if MPI.COMM_WORLD.rank == 0:
         np.savetxt(out / "necking.csv", np.c_[ours["u"], ours["force"], ours["radius"]], delimiter=",",
                    header="u_mm,force_kN,neck_radius_mm", comments="")
-        _picture(out / f"{NAME}.png", {"this code" + (" (coarse mesh)" if small else ""): ours}, ref)
+        mesh = "{n_r}x{n_z}".format(**{**dict(n_r=N_R, n_z=N_Z), **args})
+        _picture(out / f"{NAME}.png", {f"this code (P2, {mesh}, {args['n_steps']} incr.)": ours}, ref,
+                 f"CalculiX (CAX8R, {N_R}x{N_Z}, {CASE_STEPS} incr.)")
     return checks
 
 
-def _picture(path: pathlib.Path, runs: dict, ref: np.ndarray) -> None:
+def _picture(path: pathlib.Path, runs: dict, ref: np.ndarray, ref_label: str) -> None:
     """Force and neck radius against the elongation: our runs, CalculiX, the homogeneous bar."""
     import matplotlib
     matplotlib.use("Agg")
@@ -301,8 +303,8 @@ def _picture(path: pathlib.Path, runs: dict, ref: np.ndarray) -> None:
     f_h, r_h = homogeneous(u)
     a.plot(u, f_h, ":", color="0.5", label="straight bar, homogeneous (closed form)")
     b.plot(u, r_h / R, ":", color="0.5", label="straight bar, homogeneous (closed form)")
-    a.plot(ref[:, 1], ref[:, 2], "k-", lw=2.5, alpha=0.35, label="CalculiX (CAX8R, same grid)")
-    b.plot(ref[:, 1], ref[:, 3] / (R * (1.0 - REDUCTION)), "k-", lw=2.5, alpha=0.35, label="CalculiX (CAX8R, same grid)")
+    a.plot(ref[:, 1], ref[:, 2], "k-", lw=2.5, alpha=0.35, label=ref_label)
+    b.plot(ref[:, 1], ref[:, 3] / (R * (1.0 - REDUCTION)), "k-", lw=2.5, alpha=0.35, label=ref_label)
     for label, run_ in runs.items():
         a.plot(run_["u"], run_["force"], "-", lw=1, label=label)
         b.plot(run_["u"], run_["radius"] / (R * (1.0 - REDUCTION)), "-", lw=1, label=label)
@@ -360,24 +362,22 @@ def study(out: pathlib.Path, calculix: bool = True) -> list[dict]:
     ``out``. Serial."""
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    rows, curves = [], {}
+    rows = []
     for n_r, n_z in STUDY_MESHES:
         for n in STUDY_STEPS:
             r = simulate(n_r=n_r, n_z=n_z, n_steps=n, predictor="linear", cache_dir=out / "meshes")
-            curves[("ours", n_r, n_z, n)] = r
             rows.append(_study_row("this code (P2 triangles)", n_r, n_z, n, r))
     for n_r, n_z, n in STUDY_CALCULIX if calculix else ():
         hist, cpu = run_calculix(out / f"ccx_{n_r}x{n_z}_{n}", n_r=n_r, n_z=n_z, n_steps=n)
         r = dict(u=np.r_[0.0, hist[:, 1]], force=np.r_[0.0, hist[:, 2]], radius=np.r_[R * (1 - REDUCTION), hist[:, 3]],
                  newton_its=0, cutbacks=0, cpu_s=cpu, completed=True)
-        curves[("ccx", n_r, n_z, n)] = r
         rows.append(_study_row("CalculiX (CAX8R)", n_r, n_z, n, r))
     keys = list(rows[0])
     with open(out / "necking_study.csv", "w") as f:
         f.write(",".join(keys) + "\n")
         for row in rows:
             f.write(",".join(f"{row[k]:.6g}" if isinstance(row[k], float) else str(row[k]) for k in keys) + "\n")
-    _study_picture(out / "necking_study.png", curves)
+    study_picture(out / "necking_study.csv", out / "necking_study.png")
     return rows
 
 
@@ -389,29 +389,36 @@ def _study_row(code, n_r, n_z, n, r) -> dict:
                 completed=bool(r["completed"]))
 
 
-def _study_picture(path: pathlib.Path, curves: dict) -> None:
+def study_picture(csv: pathlib.Path, png: pathlib.Path) -> None:
+    """The study's table as a picture: force and neck radius at 6 mm against the increment of u, one
+    line per mesh and code (straight lines through 0: first order in the increment)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
-    finest = max((k for k in curves if k[0] == "ours"), key=lambda k: (k[2], k[3]))
-    ref = curves[finest]
-    for key, r in curves.items():
-        code, n_r, n_z, n = key
-        u = r["u"][(r["u"] > 0.5) & (r["u"] <= COMPARE_UP_TO + 1e-9)]
-        df = np.interp(u, r["u"], r["force"]) / np.interp(u, ref["u"], ref["force"]) - 1.0
-        dr = np.interp(u, r["u"], r["radius"]) / np.interp(u, ref["u"], ref["radius"]) - 1.0
-        style = dict(ls="--" if code == "ccx" else "-", lw=1.0)
-        label = f"{'CalculiX' if code == 'ccx' else 'ours'} {n_r}x{n_z}, {n} incr."
-        a.plot(u, 100 * df, label=label, **style)
-        b.plot(u, 100 * dr, label=label, **style)
-    for ax, what in ((a, "force"), (b, "neck radius")):
-        ax.set_xlabel("elongation of the half bar u [mm]")
-        ax.set_ylabel(f"{what} - ours on {finest[1]}x{finest[2]}, {finest[3]} incr. [%]")
+    rows = np.genfromtxt(csv, delimiter=",", names=True, dtype=None, encoding=None)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    colours = {m: f"C{k}" for k, m in enumerate(STUDY_MESHES)}
+    for code, style in (("this code (P2 triangles)", "o-"), ("CalculiX (CAX8R)", "s--")):
+        for mesh in STUDY_MESHES:
+            sel = (rows["code"] == code) & (rows["n_r"] == mesh[0]) & (rows["n_z"] == mesh[1])
+            if not sel.any():
+                continue
+            du = PULL / rows["increments"][sel]
+            order = np.argsort(du)
+            label = f"{'ours' if code.startswith('this') else 'CalculiX'} {mesh[0]}x{mesh[1]}"
+            for ax, col in zip(axes, ("force_6mm", "radius_6mm")):
+                ax.plot(du[order], rows[col][sel][order], style, color=colours[mesh], ms=4, lw=1,
+                        mfc="none" if code.startswith("Calc") else None, label=label)
+    for ax, what in zip(axes, ("force on the end at u = 6 mm [kN]", "neck radius at u = 6 mm [mm]")):
+        ax.set_xlabel("increment of u [mm] (7 mm / increments)")
+        ax.set_ylabel(what)
+        ax.set_xlim(left=0.0)
         ax.grid(alpha=0.3)
-    a.legend(fontsize=6, ncol=2)
+    axes[0].legend(fontsize=7, ncol=2)
+    fig.suptitle("Necking bar: mesh (cells n_r x n_z) and increment study, P2 triangles against CalculiX CAX8R",
+                 fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(png, dpi=110)
     plt.close(fig)
 
 
