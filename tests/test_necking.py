@@ -44,6 +44,8 @@ def test_saturation_term_checks_and_chen():
         Hardening((0.0,), (1.0,), dsigma=-1.0, delta=2.0)
     with pytest.raises(MaterialError, match=r"delta = nan must be a finite number >= 0"):
         Hardening((0.0,), (1.0,), dsigma=1.0, delta=float("nan"))
+    with pytest.raises(MaterialError, match=r"delta = True must be a finite number >= 0"):
+        Hardening((0.0,), (1.0,), dsigma=1.0, delta=True)
     with pytest.raises(MaterialError, match=r"Chen's law takes a piecewise-linear hardening table"):
         cm.Chen(1000.0, 0.3, LAW)
     # the curve and its slope

@@ -189,7 +189,7 @@ class Hardening:
             raise MaterialError(f"tail_slope = {self.tail_slope!r} must be >= 0 (softening is not supported)")
         for name in ("dsigma", "delta"):
             value = getattr(self, name)
-            if not (isinstance(value, (int, float, np.number)) and np.isfinite(value)):
+            if isinstance(value, bool) or not (isinstance(value, (int, float, np.number)) and np.isfinite(value)):
                 raise MaterialError(f"{name} = {value!r} must be a finite number >= 0 (the saturation term)")
             if value < 0.0:
                 raise MaterialError(f"{name} = {value!r} must be >= 0: a negative saturation term softens, "
@@ -323,5 +323,5 @@ class Hardening:
         return dp, h_act + self.saturation_term(pn + dp)[1]
 
     #: the largest number of Newton steps of :meth:`solve_dp` with a saturation term (monotone
-    #: convergence, quadratic near the root: 5 or 6 steps at the necking bar's increments)
+    #: convergence, quadratic near the root: round-off in 3 steps for the necking bar's law)
     NEWTON_MAX = 60
