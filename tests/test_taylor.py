@@ -25,6 +25,9 @@ from comove_dolfinx.solver import IncrementalSolver, StepSettings
 from comove_dolfinx.taylor import taylor_test
 
 HARDENING = Hardening((0.0, 0.05, 0.2), (15.0, 20.0, 22.0))     # yields at 1.5 % strain (E = 1000)
+# law "j2_saturation": J2 with sigma_y = 15 + 10 p + 10 (1 - exp(-20 p)), the Newton iteration of the
+# return map (its slope at yield, 210, is of the order of G = 385)
+SATURATION = Hardening.saturation(15.0, 10.0, 10.0, 20.0)
 FRICTION = {"none": 0.0, "slip": 0.1, "stick": 5.0}
 
 
@@ -68,7 +71,8 @@ def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty",
     "field" (the top edge's motion as a displacement field). ``compiled``: the return map in the
     generated stress evaluation (True, the model's default) or in NumPy (False)."""
     x0 = 0.5 if kind == "axisymmetric" else 0.0
-    material = as_material(1000.0, 0.3, law, HARDENING)
+    material = (as_material(1000.0, 0.3, "j2", SATURATION) if law == "j2_saturation"
+                else as_material(1000.0, 0.3, law, HARDENING))
     items = [_top(x0, load), Pressure("right", 5.0), Traction("left", (2.0, -1.0))]
     if load == "point":
         items.append(PointLoad((x0 + 1.0, 0.25), (-1.0, -2.0)))
@@ -163,6 +167,11 @@ CASES = (
        for k in ("plane_strain", "plane_stress", "axisymmetric")]
     + [dict(update="small_strain", law="chen"),
        dict(kind="plane_stress", update="small_strain", law="j2", method="nitsche", theta=0)]
+    # the saturation law (Newton on the return's plastic strain): compiled, NumPy, plane stress's
+    # return, and the facet return maps of Nitsche's term in axisymmetry and plane stress
+    + [dict(kind=k, law="j2_saturation", compiled=comp) for k, comp in
+       (("axisymmetric", True), ("axisymmetric", False), ("plane_stress", True))]
+    + [dict(kind=k, law="j2_saturation", method="nitsche", theta=0) for k in ("axisymmetric", "plane_stress")]
 )
 
 

@@ -18,7 +18,7 @@ them from inside a gmsh session of your own. For a session of your own (meshing 
 demos/demo_seal.py does), ``gmsh_session.start()``/``stop()`` keep Python's Ctrl-C handler, which
 gmsh's own calls replace by the system's default (the process then dies at Ctrl-C without a word).
 """
-from .builders import annulus_sector, plate_section, quarter_disc, rectangle
+from .builders import annulus_sector, necking_bar, necking_bar_grid, plate_section, quarter_disc, rectangle
 from .meshes import (
            BODY_TAG,
            MeshData,
@@ -29,4 +29,4 @@ from .meshes import (
 )
 
 __all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "fix_coordinate_element", "from_dolfinx",
-           "load_msh", "plate_section", "quarter_disc", "rectangle"]
+           "load_msh", "necking_bar", "necking_bar_grid", "plate_section", "quarter_disc", "rectangle"]

@@ -237,3 +237,83 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
             _add_group(1, [curve], tag, name)
 
     return _build("quarter_disc", params, construct, comm, cache_dir)
+
+
+def necking_bar_grid(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n_r: int = 5,
+                     n_z: int = 40, grading: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """The vertex grid of :func:`necking_bar`: axial positions z_j (n_z + 1) and radii r_ij
+    ((n_z + 1) x (n_r + 1)), r_ij = (i / n_r) R(z_j), R(z) the tapered radius. The builder's Gmsh mesh
+    has these vertices (transfinite interpolation of the same boundary points); an independent code can
+    mesh the bar with them."""
+    q = grading ** (1.0 / (n_z - 1)) if n_z > 1 else 1.0
+    j = np.arange(n_z + 1)
+    z = 0.5 * L * (j / n_z if q == 1.0 else (q ** j - 1.0) / (q ** n_z - 1.0))
+    radius = R * (1.0 - reduction * (1.0 - z / (0.5 * L)))
+    return z, radius[:, None] * np.arange(n_r + 1)[None, :] / n_r
+
+
+def necking_bar(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n_r: int = 5,
+                n_z: int = 40, grading: float = 3.0, order: int = 2, comm: MPI.Comm = MPI.COMM_WORLD,
+                cache_dir: str | os.PathLike = "meshes") -> MeshData:
+    """The quarter of the axial section of a round tensile bar with a neck at its centre (axisymmetric:
+    x = r, y = z), structured triangles.
+
+    The bar of length L and radius R is modelled on 0 <= z <= L/2 (its centre, the neck, at z = 0, a
+    plane of symmetry) and 0 <= r <= R(z); the radius tapers linearly from R (1 - reduction) at the
+    neck to R at the end z = L/2, the imperfection that starts the neck there (Simo 1988: R = 6.413,
+    L = 53.334, reduction 1.8 %).
+
+    Parameters
+    ----------
+    R, L
+        Radius at the end and length of the whole bar (in the user's units; the benchmark's are mm).
+    reduction
+        Relative reduction of the radius at the neck, 0 <= reduction < 1.
+    n_r, n_z
+        Cells across the radius (uniform) and along the half-length, each cell cut into two
+        triangles with alternating diagonals.
+    grading
+        Ratio of the longest cell (at the end) to the shortest (at the neck) along z, >= 1: lengths
+        in geometric progression.
+    order, comm, cache_dir
+        As for `rectangle`.
+
+    Returns
+    -------
+    MeshData
+        Facet tags axis (r = 0) = 1, neck (z = 0, the symmetry plane) = 2, end (z = L/2, pulled) = 3,
+        surface (the free outer surface) = 4; cells "body" = BODY_TAG. The vertices are those of
+        :func:`necking_bar_grid`.
+    """
+    _positive(R=R, L=L, grading=grading)
+    order = _check_order(order)
+    for name, n in (("n_r", n_r), ("n_z", n_z)):
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
+    if not (isinstance(reduction, (int, float, np.number)) and 0.0 <= reduction < 1.0):
+        raise ValueError(f"reduction must be a number in [0, 1), got {reduction!r}")
+    if grading < 1.0:
+        raise ValueError(f"grading must be >= 1 (cells longest at the end), got {grading!r}")
+    params = dict(R=float(R), L=float(L), reduction=float(reduction), n_r=int(n_r), n_z=int(n_z),
+                  grading=float(grading), order=order)
+    q = grading ** (1.0 / (n_z - 1)) if n_z > 1 else 1.0
+
+    def construct() -> None:
+        geo = gmsh.model.geo
+        h, r_neck = 0.5 * L, R * (1.0 - reduction)
+        p = [geo.addPoint(x, y, 0.0) for x, y in [(0.0, 0.0), (r_neck, 0.0), (R, h), (0.0, h)]]
+        neck, surface = geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2])
+        end, axis = geo.addLine(p[3], p[2]), geo.addLine(p[0], p[3])       # all pointing to +r or +z
+        body = geo.addPlaneSurface([geo.addCurveLoop([neck, surface, -end, -axis])])
+        for curve, n in ((neck, n_r), (end, n_r)):
+            geo.mesh.setTransfiniteCurve(curve, n + 1)
+        for curve in (surface, axis):
+            geo.mesh.setTransfiniteCurve(curve, n_z + 1, "Progression", q)
+        geo.mesh.setTransfiniteSurface(body, _ARRANGEMENT, [p[0], p[1], p[2], p[3]])
+        geo.synchronize()
+        _add_group(2, [body], BODY_TAG, "body")
+        for tag, (name, curve) in enumerate(
+                [("axis", axis), ("neck", neck), ("end", end), ("surface", surface)], start=1):
+            _add_group(1, [curve], tag, name)
+
+    return _build("necking_bar", params, construct, comm, cache_dir)

@@ -137,7 +137,13 @@ class Elastic:
 
 @dataclass(frozen=True)
 class Hardening:
-    """Isotropic hardening: yield stress against equivalent plastic strain, piecewise linear.
+    """Isotropic hardening: yield stress against equivalent plastic strain.
+
+    sigma_y(p) = T(p) + dsigma (1 - exp(-delta p)): T piecewise linear through the table's points
+    (its last segment continued with ``tail_slope``), plus an optional saturation (Voce) term, which
+    :meth:`saturation` uses for sigma0 + H p + dsigma (1 - exp(-delta p)). The return maps solve
+    the consistency equation with this curve exactly (a Newton iteration on the plastic strain
+    increment where the saturation term is present) and differentiate the solution exactly.
 
     Parameters
     ----------
@@ -147,11 +153,16 @@ class Hardening:
         Yield stresses sigma_k > 0 at p_k, non-decreasing (no softening).
     tail_slope : float, optional
         Slope d sigma_y / dp beyond the last point, >= 0; the default 0 keeps the curve flat there.
+    dsigma, delta : float, optional
+        Saturation term: the stress it adds at saturation (>= 0, in the units of the stresses) and
+        its rate (>= 0, per unit plastic strain); the default 0 leaves the table alone.
     """
 
     strain: tuple[float, ...]
     stress: tuple[float, ...]
     tail_slope: float = 0.0
+    dsigma: float = 0.0
+    delta: float = 0.0
 
     def __post_init__(self) -> None:
         p = tuple(float(v) for v in np.atleast_1d(self.strain))
@@ -176,6 +187,14 @@ class Hardening:
                                     f"{s[k - 1]!r}; softening is not supported: make the stresses non-decreasing")
         if self.tail_slope < 0.0:
             raise MaterialError(f"tail_slope = {self.tail_slope!r} must be >= 0 (softening is not supported)")
+        for name in ("dsigma", "delta"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, (int, float, np.number)) and np.isfinite(value)):
+                raise MaterialError(f"{name} = {value!r} must be a finite number >= 0 (the saturation term)")
+            if value < 0.0:
+                raise MaterialError(f"{name} = {value!r} must be >= 0: a negative saturation term softens, "
+                                    "which is not supported")
+            object.__setattr__(self, name, float(value))
         object.__setattr__(self, "strain", p)
         object.__setattr__(self, "stress", s)
         object.__setattr__(self, "tail_slope", float(self.tail_slope))
@@ -195,6 +214,44 @@ class Hardening:
         """Perfect plasticity, sigma_y = sigma0."""
         return cls((0.0,), (sigma0,))
 
+    @classmethod
+    def saturation(cls, sigma0: float, H: float, dsigma: float, delta: float) -> "Hardening":
+        """Linear and saturation (Voce) hardening, sigma_y = sigma0 + H p + dsigma (1 - exp(-delta p)).
+
+        Parameters
+        ----------
+        sigma0 : float
+            Initial yield stress, > 0.
+        H : float
+            Linear hardening modulus, >= 0.
+        dsigma : float
+            Stress added by the saturation term as p grows without end, >= 0.
+        delta : float
+            Saturation rate, >= 0 (the term reaches 1 - 1/e of dsigma at p = 1/delta).
+
+        Simo (1988) uses it for the necking bar (0.45 + 0.12924 p + 0.265 (1 - exp(-16.93 p)) GPa).
+        """
+        for name, value in (("sigma0", sigma0), ("H", H), ("dsigma", dsigma), ("delta", delta)):
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
+                    or not np.isfinite(value):
+                raise MaterialError(f"{name} = {value!r} must be a finite number (Hardening.saturation)")
+            if value < 0.0 or (name == "sigma0" and value == 0.0):
+                raise MaterialError(f"{name} = {value!r} must be {'> 0' if name == 'sigma0' else '>= 0'} "
+                                    "(Hardening.saturation: no softening)")
+        return cls((0.0,), (sigma0,), tail_slope=H, dsigma=dsigma, delta=delta)
+
+    @property
+    def smooth(self) -> bool:
+        """True when the curve has a saturation term (the return maps then iterate)."""
+        return self.dsigma > 0.0 and self.delta > 0.0
+
+    def saturation_term(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The saturation term dsigma (1 - exp(-delta p)) and its slope at p (zeros without one)."""
+        if not self.smooth:
+            return np.zeros_like(p), np.zeros_like(p)
+        e = np.exp(-self.delta * p)
+        return self.dsigma * (1.0 - e), self.dsigma * self.delta * e
+
     @property
     def segments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Start strains, start stresses and slopes of the segments (the last one runs to infinity)."""
@@ -203,18 +260,25 @@ class Hardening:
     def sigma_y(self, p: ArrayLike) -> np.ndarray:
         """Yield stress at equivalent plastic strain p (vectorised)."""
         p = np.asarray(p, dtype=float)
-        return np.interp(p, self._p, self._s) + self.tail_slope * np.maximum(p - self._p[-1], 0.0)
+        out = np.interp(p, self._p, self._s) + self.tail_slope * np.maximum(p - self._p[-1], 0.0)
+        return out + self.saturation_term(p)[0] if self.smooth else out
 
     def slope(self, p: ArrayLike) -> np.ndarray:
-        """Slope d sigma_y / dp of the segment holding p, right-continuous at the points (vectorised)."""
-        k = np.searchsorted(self._p, np.asarray(p, dtype=float), side="right") - 1
-        return self._h[np.clip(k, 0, len(self._h) - 1)]
+        """Slope d sigma_y / dp at p: the table's segment holding p (right-continuous at the points)
+        plus the saturation term's slope (vectorised)."""
+        p = np.asarray(p, dtype=float)
+        k = np.searchsorted(self._p, p, side="right") - 1
+        out = self._h[np.clip(k, 0, len(self._h) - 1)]
+        return out + self.saturation_term(p)[1] if self.smooth else out
 
     def solve_dp(self, seq_tr: ArrayLike, p_n: ArrayLike, three_mu: float) -> tuple[np.ndarray, np.ndarray]:
         """Exact root dp of seq_tr - three_mu dp - sigma_y(p_n + dp) = 0 (docs/theory.md section 4.2).
 
-        The residual is piecewise linear and strictly decreasing in dp, so the root lies in the segment
-        after the last table point at which the residual is still >= 0. A root exactly on a table point belongs to the segment that starts there.
+        The residual is strictly decreasing in dp, so the root lies in the segment after the last table
+        point at which the residual is still >= 0. A root exactly on a table point belongs to the
+        segment that starts there. On the segment the residual is linear (solved at once) or, with a
+        saturation term, convex: Newton's iteration from the segment's start then rises monotonically
+        to the root, and runs until its step is below round-off.
 
         Parameters
         ----------
@@ -228,7 +292,8 @@ class Hardening:
         Returns
         -------
         dp, H_active : ndarray
-            The increment and the slope of the segment holding p_n + dp.
+            The increment and the slope d sigma_y / dp at p_n + dp (of the segment holding it, plus
+            the saturation term's).
         """
         seq, pn = np.broadcast_arrays(np.asarray(seq_tr, dtype=float), np.asarray(p_n, dtype=float))
         # the segment holding p_n, then one more for every later table point at which the residual is
@@ -237,9 +302,26 @@ class Hardening:
         if len(self._p) > 1:
             later = self._p[None, 1:] > pn[..., None]
             ahead = seq[..., None] - three_mu * (self._p[None, 1:] - pn[..., None]) - self._s[None, 1:]
+            if self.smooth:
+                ahead = ahead - self.saturation_term(self._p[1:])[0]
             k = k + np.count_nonzero(later & (ahead >= 0.0), axis=-1)
         p0, h_act = self._p[k], self._h[k]
         start = np.maximum(p0, pn)
         g = seq - three_mu * (start - pn) - (self._s[k] + h_act * (start - p0))
-        dp = start - pn + g / (three_mu + h_act)
-        return dp, h_act
+        if not self.smooth:
+            return start - pn + g / (three_mu + h_act), h_act
+        dp = start - pn
+        for _ in range(self.NEWTON_MAX):
+            v, dv = self.saturation_term(pn + dp)
+            r = seq - three_mu * dp - (self._s[k] + h_act * (pn + dp - p0)) - v
+            step = r / (three_mu + h_act + dv)
+            dp = dp + step
+            if np.all(np.abs(step) <= 1e-14 * (np.abs(dp) + seq / three_mu)):   # round-off of r
+                break
+        else:
+            raise RuntimeError("the saturation law's return map did not converge (non-finite stress?)")
+        return dp, h_act + self.saturation_term(pn + dp)[1]
+
+    #: the largest number of Newton steps of :meth:`solve_dp` with a saturation term (monotone
+    #: convergence, quadratic near the root: round-off in 3 steps for the necking bar's law)
+    NEWTON_MAX = 60

@@ -52,7 +52,7 @@ class PointUpdate:
 
 @dataclass(frozen=True)
 class Plastic:
-    """An elastic-plastic material: elastic constants and a hardening table (docs/theory.md 4)."""
+    """An elastic-plastic material: elastic constants and a hardening law (docs/theory.md 4)."""
 
     E: float
     nu: float
@@ -62,8 +62,8 @@ class Plastic:
     def __post_init__(self):
         object.__setattr__(self, "elastic", Elastic(self.E, self.nu))
         if not isinstance(self.hardening, Hardening):
-            raise MaterialError(f"hardening = {self.hardening!r}: give a Hardening (Hardening.table, "
-                                "Hardening.linear or Hardening.perfect)")
+            raise MaterialError(f"hardening = {self.hardening!r}: give a Hardening (Hardening(strains, "
+                                "stresses), .linear, .perfect or .saturation)")
 
     def update(self, sig_rot: np.ndarray, sig_tr: np.ndarray, p_n: np.ndarray, kind: str,
                tangent: bool = True) -> PointUpdate:
@@ -145,6 +145,9 @@ class Chen(J2):
 
     def __post_init__(self):
         super().__post_init__()
+        if self.hardening.smooth:
+            raise MaterialError("Chen's law takes a piecewise-linear hardening table, not a saturation "
+                                f"term (dsigma = {self.hardening.dsigma!r}): use J2, or give Chen a table")
         object.__setattr__(self, "_surface", rm.chen_loading_surface(self.elastic, self.hardening))
 
     @property

@@ -251,10 +251,15 @@ class Model:
     def _surface_table(self):
         """The plastic law's loading surface (its hardening table) as a Constant: models that differ
         in the table's values only share the compiled stress evaluation."""
-        p0, s0, h = self.plastic.surface.segments
+        surface = self.plastic.surface
+        p0, s0, h = surface.segments
         c = fem.Constant(self.mesh, np.stack([p0, s0, h]).astype(PETSc.ScalarType))
         n = len(p0)
-        return rm_ufl.Table(*([c[i, k] for k in range(n)] for i in range(3)))
+        saturation = {}
+        if surface.smooth:                    # its saturation term, dsigma and delta
+            v = fem.Constant(self.mesh, np.array([surface.dsigma, surface.delta], dtype=PETSc.ScalarType))
+            saturation = {"dsigma": v[0], "delta": v[1]}
+        return rm_ufl.Table(*([c[i, k] for k in range(n)] for i in range(3)), **saturation)
 
     @property
     def bcs(self) -> list:

@@ -165,9 +165,9 @@ def _plane_stress_segment(A, B, pn, c1, c2, hardening):
     dgamma = 1.5 (p_k - p_n) / sigma_k is >= sigma_k: both sigma_eq(dgamma) (decreasing) and
     p(dgamma) = p_n + 2/3 dgamma sigma_eq(dgamma) (increasing) are monotone.
     """
-    p0, s0, _ = hardening.segments
+    p0 = hardening.segments[0]
     seg = np.zeros(len(pn), dtype=int)
-    for pk, sk in zip(p0[1:], s0[1:]):
+    for pk, sk in zip(p0[1:], hardening.sigma_y(p0[1:])):
         g = 1.5 * np.maximum(pk - pn, 0.0) / sk
         seq = np.sqrt(A / (1.0 + c1 * g) ** 2 + B / (1.0 + c2 * g) ** 2)
         seg += (pk <= pn) | (seq >= sk)
@@ -181,7 +181,9 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     f1 = 1 / (1 + c1 dgamma), c1 = E / (3 (1 - nu)), and xx - yy and xy by f2 = 1 / (1 + 2 G dgamma), so
     sigma_eq^2 = A f1^2 + B f2^2 with A = (xx + yy)^2 / 4, B = 3 (xx - yy)^2 / 4 + 3 xy^2 of the trial
     stress, and dp = 2/3 dgamma sigma_eq. The segment of the table is found in closed form, then
-    sigma_eq = sigma_y(p_n + dp) is solved by a bracketed Newton iteration on that (smooth) segment.
+    sigma_eq = sigma_y(p_n + dp) is solved by a bracketed Newton iteration on that (smooth) segment;
+    a saturation term V(p) of the hardening enters as phi(g) = sigma_eq (1 - 2/3 H g) - Y0 - V(p), still
+    decreasing in g, since p grows with g.
     """
     E, nu, G = elastic.E, elastic.nu, elastic.mu
     c1, c2 = E / (3.0 * (1.0 - nu)), 2.0 * G
@@ -213,6 +215,10 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
         dse = -(c1 * Aa * f1 ** 3 + c2 * Ba * f2 ** 3) / se
         phi = se * (1.0 - 2.0 / 3.0 * Ha * ga) - Y0[act]
         dphi = dse * (1.0 - 2.0 / 3.0 * Ha * ga) - 2.0 / 3.0 * Ha * se
+        if hardening.smooth:
+            v, dv = hardening.saturation_term(pn[act] + 2.0 / 3.0 * ga * se)
+            phi = phi - v
+            dphi = dphi - 2.0 / 3.0 * dv * (se + ga * dse)
         lo[act] = np.where(phi > 0.0, ga, lo[act])
         hi[act] = np.where(phi < 0.0, ga, hi[act])
         new = ga - phi / dphi
@@ -229,6 +235,10 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     dse = -(c1 * A * f1 ** 3 + c2 * B * f2 ** 3) / se
     w = 1.0 - 2.0 / 3.0 * H * g
     dphi = dse * w - 2.0 / 3.0 * H * se
+    if hardening.smooth:                  # d phi / d se at fixed g, and phi', with V(p)
+        dv = hardening.saturation_term(pn + 2.0 / 3.0 * g * se)[1]
+        w = w - 2.0 / 3.0 * dv * g
+        dphi = dphi - 2.0 / 3.0 * dv * (se + g * dse)
     out = np.zeros((len(g), 4))
     out[:, 0] = 0.5 * (a * f1 + b * f2)
     out[:, 1] = 0.5 * (a * f1 - b * f2)
