@@ -118,7 +118,7 @@ def advice(failure: Failure | None, *, contact: bool = False, friction: bool = F
                 f"penalty), take {more}{law}")
     if failure.cause == MAX_IT and failure.steady:
         need = failure.iterations_needed(target) if target is not None else None
-        raise_to = failure.max_it + need + 5 if need is not None else 2 * failure.max_it
+        raise_to = failure.max_it + need + 2 if need is not None else 2 * failure.max_it
         return (f"the residual was still falling steadily: raise NewtonSettings.max_it from "
                 f"{failure.max_it} to about {raise_to}")
     limit = ("; the load may have reached the body's limit load, which a force-controlled step "
