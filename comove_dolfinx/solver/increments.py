@@ -252,6 +252,7 @@ class IncrementalSolver:
             elif pred_now and alt and len(past) > 1:
                 m.u.x.array[:] = _extrapolate(past[-(alt + 1):], t_try)
                 started = "extrapolation"
+            scale = self.newton.residual_scale
             ok, its, reason = self.newton.solve()
             failure = self.newton.failure
             passes = 1
@@ -267,6 +268,9 @@ class IncrementalSolver:
                     failure = failures.Failure(failures.INADMISSIBLE, folded, max_it=self.newton.settings.max_it)
             if not ok:
                 m.restore()
+                # a failed attempt is no measure of the run's forces: an extrapolation that led it
+                # astray can start it at a residual many times the load increment's
+                self.newton.residual_scale = scale
                 if from_start:
                     have_rate = from_start = False
                 failed_its += its
