@@ -55,8 +55,9 @@ class Step:
     tangent), "none" (the last converged state), "linear" or "quadratic" (extrapolation of the last
     converged states), docs/theory.md section 7.2. ``retry``: a failed increment is tried once more
     at the same size from the other start (a predictor if it started from the last state, the last
-    state if it started from a predictor) before it is halved; the start that converged is kept for
-    the increments after. ``max_cutbacks``: halvings of a failed increment.
+    state if it started from a predictor) before it is halved; a predictor that rescued an increment
+    begun from the last state is kept for the rest of the step. ``max_cutbacks``: halvings of a
+    failed increment.
     ``first``: the step's first increment as a fraction 1, 1/2, 1/4, ... of the nominal one (at most
     ``max_cutbacks`` halvings), doubled back to it after easy increments: a hard start (a first
     contact and its first yield) at a size that converges instead of failed attempts at the nominal.
@@ -224,12 +225,12 @@ class Results:
     def cutbacks(self) -> int:
         """Halvings of increments that then converged (those of a step that stopped are in
         ``failures`` and the message)."""
-        return sum(getattr(inc, "cutbacks", 0) for inc in self.increments)
+        return sum(inc.cutbacks for inc in self.increments)
 
     @property
     def retries(self) -> int:
         """Failed attempts tried again at the same size from the other start."""
-        return sum(getattr(inc, "retries", 0) for inc in self.increments)
+        return sum(inc.retries for inc in self.increments)
 
     def failure_summary(self) -> str:
         """The failed attempts in words, e.g. "3 failed attempts (inadmissible 2, max_it 1), 2

@@ -10,8 +10,19 @@ extrapolation it knows where the path is heading at t_n, not where it came from;
 increment of a job, before any factorisation, starts from the unloaded state, the first of a later
 step from the tangent at the state where the step before ended.
 An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
-``divergence`` over the increment's first fails the increment; the loop then restores the last
-converged state and halves the increment, down to the smallest increment dt_nom / 2^max_cutbacks;
+``divergence`` over the increment's first fails the attempt; the loop restores the last converged
+state (and the run's residual scale: a failed attempt is no measure of its forces). With ``retry``
+the attempt is made once more at the same size from the other start: from the predictor (the
+tangent, else the linear extrapolation) if it began at the last state, from the last state if a
+predictor led it astray. Begun from the last state, the first iteration of an elastic-plastic
+increment sees no strain increment, so every point that was yielding is elastic in its tangent
+(the trial stress lies on the yield surface, not beyond it), and a body that flows plastically
+can be sent far off: a predictor that rescues such an increment is kept for the rest of the step.
+A predictor fails where the path changes its regime (a first contact, a first yield, an
+unloading), which the past states cannot foresee; the last state that rescues such an increment
+serves that increment only. Every failed attempt is counted by its cause (failures.py). Otherwise,
+or if the retry fails too, the loop halves the increment, down to the smallest increment
+dt_nom / 2^max_cutbacks;
 when an increment of that size fails, the run stops cleanly (every converged increment has already
 been handed out). A linear solver that fails for want of memory or of a feature of its build
 (newton.py, ``hopeless``) stops the run at once: halving would fail the same way. The floor is
@@ -236,7 +247,11 @@ class IncrementalSolver:
                              and self._agrees_with_path(rate, past))
         # where an attempt starts: from a predictor (``use_pred``) or the last converged state. With
         # ``retry`` a failed attempt is tried once more at the same size from the other start before
-        # the increment is halved; a retry that converges makes its start the step's from then on
+        # the increment is halved. A predictor that rescues an increment begun from the last state
+        # is kept from then on (that start fails for a lasting reason: its first tangent is elastic
+        # where the body flows plastically); the last state that rescues one a predictor led astray
+        # serves that increment only (a predictor fails at a change of regime the past states could
+        # not foresee: a first contact, a first yield, an unloading)
         use_pred = bool(st.predictor) if resume is None else bool(resume.get("use_pred", st.predictor))
         t_mark, failed_its, retried, retries = time.perf_counter(), 0, False, 0
         pred_now = use_pred
@@ -305,10 +320,9 @@ class IncrementalSolver:
                 easy = 0
                 pred_now = use_pred
                 continue
-            if retried and pred_now != use_pred:
-                log.info("  the increments start from the %s from now on",
-                         "predictor" if pred_now else "last converged state")
-                use_pred = pred_now
+            if retried and pred_now and not use_pred:
+                log.info("  the increments start from the predictor from now on")
+                use_pred = True
             t, step = t_try, step + 1
             inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its, retries)
             result.increments.append(inc)
