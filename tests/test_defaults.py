@@ -176,3 +176,23 @@ def test_the_filter_lets_the_users_records_through():
     build = logging.LogRecord("root", logging.INFO, "/x/setuptools/_distutils/ccompiler.py", 1, "gcc", None, None)
     warn = logging.LogRecord("root", logging.WARNING, "/x/setuptools/_distutils/ccompiler.py", 1, "w", None, None)
     assert f.filter(mine) and not f.filter(build) and f.filter(warn)
+
+
+def test_a_contact_set_that_keeps_switching_is_named_in_the_message(tmp_path):
+    """The beam scene (coarse) pressed onto its foundation in 5 increments with a stiff penalty and
+    no cut-back: its first increment runs out of iterations while the contact set changes from
+    iterate to iterate. The message says so and asks for a softer penalty or more increments; the
+    stability monitor, which records the contact set at every iterate on its own, saw at least as
+    many changes over the whole solve."""
+    from comove_dolfinx.presets import get_scene
+    from comove_dolfinx.stability import Recorder
+    scene = get_scene("beam", ["size=0.25", "gamma0=100000", "n_steps=5", "max_cutbacks=0"])
+    job = scene.job(scene.mesh_data(MPI.COMM_WORLD))
+    rec = Recorder()
+    job.newton.monitor = rec
+    res = job.run()
+    assert not res.completed and res.failures == {failures.MAX_IT: 1}
+    assert "the contact set kept switching (" in res.message
+    assert "lower gamma0" in res.message and "Step n = 10 instead of 5" in res.message
+    changes = int(res.message.split("kept switching (")[1].split(" changes")[0])
+    assert 2 <= changes <= rec.last_failed_changes

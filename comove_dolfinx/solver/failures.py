@@ -112,7 +112,7 @@ def advice(failure: Failure | None, *, contact: bool = False, friction: bool = F
         return ("the tangent is singular or the linear solver failed: add a support if the body can "
                 "move rigidly, or check the solver's options (NewtonSettings.petsc_options)")
     if failure.cause == MAX_IT and contact and failure.set_changes >= 2:
-        law = ", or friction without stick/slip switching (a smaller mu, or relag=False)" if friction else ""
+        law = ", or less friction (a smaller mu)" if friction else ""
         return (f"the contact set kept switching ({failure.set_changes} changes in the last "
                 f"{min(WINDOW, max(len(failure.residuals) - 1, 0))} iterations): lower gamma0 (a softer "
                 f"penalty), take {more}{law}")
