@@ -261,6 +261,16 @@ class Run:
     newton: object = None
     step_index: int = 0
     contact_stats: dict = field(default_factory=dict)    # first contact, largest penetration
+    attempts: list = field(default_factory=list)          # each step's RunResult (failed attempts)
+
+    @property
+    def failures(self) -> dict:
+        """Failed attempts per cause so far (those of the run restarted from among them)."""
+        out: dict = {}
+        for rr in self.attempts:
+            for cause, count in rr.failures.items():
+                out[cause] = out.get(cause, 0) + count
+        return out
 
     @property
     def comm(self):
@@ -315,7 +325,6 @@ class Job:
         run = Run(self, model, self.columns)
         res = Results(list(self.columns), dofs=model.num_dofs())
         saved = None
-        attempts: list[RunResult] = []       # each step's loop: its failed attempts per cause
         if restart is not None:
             from .io import checkpoint
             saved = checkpoint.load(restart, comm)
@@ -329,6 +338,8 @@ class Job:
             stats.update(saved[0].get("contact", {}))
             run.warnings = list(saved[0].get("warnings", []))
         run.contact_stats = stats
+        if saved is not None:                # the failed attempts before the checkpoint
+            run.attempts.append(RunResult(failures=dict(saved[0].get("failures", {}))))
         with timer("output"):
             for w in self.writers:
                 collective(comm, w.open, run)
@@ -356,7 +367,7 @@ class Job:
                         resume = checkpoint.restore(*saved, model, newton)
                         saved = None
                     rr, last = RunResult(), 0.0
-                    attempts.append(rr)
+                    run.attempts.append(rr)
                     for inc in solver.increments(rr, resume):
                         t = k + inc.load
                         row = {"step": len(res.rows) + 1, "time": t,
@@ -395,9 +406,7 @@ class Job:
             newton.poll = None
             bar.close()
             res.wall_s = time.perf_counter() - t_start
-            for rr in attempts:
-                for cause, count in rr.failures.items():
-                    res.failures[cause] = res.failures.get(cause, 0) + count
+            res.failures = run.failures
             self._account(res, timer, before)
             res.contact = stats if contacts else {}
             self._check_workspace(run)             # also when no increment converged

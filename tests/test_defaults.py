@@ -196,3 +196,37 @@ def test_a_contact_set_that_keeps_switching_is_named_in_the_message(tmp_path):
     assert "lower gamma0" in res.message and "Step n = 10 instead of 5" in res.message
     changes = int(res.message.split("kept switching (")[1].split(" changes")[0])
     assert 2 <= changes <= rec.last_failed_changes
+
+
+class _StopAt(cm.Writer):
+    """Ctrl-C once increment ``k`` has been written by the writers before this one."""
+
+    def __init__(self, k):
+        self.k = k
+
+    def write(self, run, row, increment):
+        if row["step"] == self.k:
+            raise KeyboardInterrupt("test")
+
+
+def test_a_restart_goes_on_as_the_run_would_have(cache, tmp_path):
+    """The bar's run from the last state (its one failed attempt retried from the extrapolation,
+    which then starts every increment) interrupted after increment 12 and restarted from its
+    checkpoint: the restart keeps the failed attempt of the run before and starts from the
+    extrapolation as that run had come to, so that it repeats the uninterrupted run (the same
+    Newton iterations in every increment, the same force)."""
+    from comove_dolfinx.io.checkpoint import Checkpoint
+    full = _pull(cache, predictor="none")
+    assert full.failures == {failures.INADMISSIBLE: 1} and full.increments[6].retries == 1        # at 0.35 of the pull
+    folder = tmp_path / "checkpoint"
+    with pytest.raises(KeyboardInterrupt):
+        _pull(cache, writers=[Checkpoint(folder, every=1, interval=0.0), _StopAt(12)], predictor="none")
+    meta = json.loads((folder / "meta.json").read_text())
+    assert meta["increment"] == 12 and meta["failures"] == {"inadmissible": 1}
+    assert meta["resume"]["use_pred"] is True
+    body, items = _bar(cache)
+    again = cm.Job(body, items, [cm.Step(20, predictor="none")], probes=[cm.Reaction("top", "pull")]).run(
+        restart=folder)
+    assert again.completed and again.failures == full.failures
+    assert again.newton_its == full.newton_its
+    assert again["pull_fy"][-1] == pytest.approx(full["pull_fy"][-1], rel=1e-12)

@@ -151,6 +151,7 @@ class Checkpoint(Writer):
                            "past_t": [t for t, _ in rs["past"]], "use_pred": bool(rs["use_pred"])},
                 "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
                 "rows": list(run.job_rows), "contact": dict(run.contact_stats), "warnings": list(run.warnings),
+                "failures": run.failures,
                 "kinds": kinds}
         return n, _pack(arrays), meta              # (packing copies the arrays; the lists are copied)
 
