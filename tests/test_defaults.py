@@ -230,3 +230,16 @@ def test_a_restart_goes_on_as_the_run_would_have(cache, tmp_path):
     assert again.completed and again.failures == full.failures
     assert again.newton_its == full.newton_its
     assert again["pull_fy"][-1] == pytest.approx(full["pull_fy"][-1], rel=1e-12)
+
+
+def test_a_step_under_loads_alone_is_force_controlled():
+    """The limit-load hint is given only when nothing but loads move: a pressure against a fixed
+    support and a fixed obstacle is force-controlled; a prescribed displacement or an obstacle that
+    moves with its factor controls the motion."""
+    from comove_dolfinx.solver.increments import _force_controlled
+    floor = cm.Plane((0.0, -3.0), (0.0, 1.0))
+    assert _force_controlled([cm.Fixed("left"), cm.Pressure("top", 0.5), cm.Contact("bottom", floor)])
+    assert not _force_controlled([cm.Fixed("left"), cm.Pressure("top", 0.5), cm.Displacement("right", 0.1, component=0)])
+    punch = cm.Plane((0.0, 1.0), (0.0, -1.0), motion=(0.0, -0.5))
+    assert not _force_controlled([cm.Fixed("bottom"), cm.Pressure("right", 0.1), cm.Contact("top", punch)])
+    assert not _force_controlled([cm.Fixed("left")])                  # nothing loads the body

@@ -195,7 +195,7 @@ class IncrementalSolver:
 
     def _friction(self) -> bool:
         """Whether a contact item of the model has friction."""
-        return any(float(getattr(item, "mu", 0.0) or 0.0) > 0.0 for item in self.newton._contacts)
+        return any(float(getattr(item, "mu", 0.0) or 0.0) > 0.0 for item in self.newton.contacts)
 
     def run(self, callbacks=(), progress=None) -> RunResult:
         """Run every increment; each callback(model, increment) is called after every converged one
@@ -308,7 +308,7 @@ class IncrementalSolver:
                 if dt <= dt_min * (1.0 + 1e-9):
                     m.set_load(t)
                     result.advice = failures.advice(
-                        failure, contact=bool(self.newton._contacts), friction=self._friction(),
+                        failure, contact=bool(self.newton.contacts), friction=self._friction(),
                         predictor=use_pred, force_controlled=_force_controlled(m.items),
                         target=self.newton.tolerance, n=st.n_steps)
                     result.message = (f"stopped at load factor {t:.6g}: an increment of the "

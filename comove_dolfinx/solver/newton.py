@@ -152,7 +152,7 @@ class Newton(LineSearches):
         self.poll = None                   # called by every rank before each iteration (a job's
                                            # collective check for Ctrl-C and SIGTERM: parallel.py)
         self.failure: failures.Failure | None = None     # of the last solve, None if it converged
-        self._contacts = [item for item in model.items if item.kind == "contact"]
+        self.contacts = [item for item in model.items if item.kind == "contact"]   # the model's contact items
         self._X = None                     # the dofs' reference coordinates (contact sets)
         self._residuals: list[float] = []
         self._sets: list = []
@@ -251,13 +251,13 @@ class Newton(LineSearches):
     def _contact_set(self) -> bytes | None:
         """The contact boundaries' nodes with a negative gap at the current iterate (this rank's
         nodes, as bytes of a boolean mask), or None without contact. Local, no collective call."""
-        if not self._contacts:
+        if not self.contacts:
             return None
         if self._X is None:
             self._X = self.model.V.tabulate_dof_coordinates()[:, :2]
         xu = self.model.u.x.array.reshape(-1, 2)
         parts = []
-        for item in self._contacts:
+        for item in self.contacts:
             nodes = item.nodes
             g = item.obstacle.gap_np(self._X[nodes] + xu[nodes], item.obstacle.displacement(item.factor))
             parts.append(np.asarray(g) < 0.0)
@@ -266,7 +266,7 @@ class Newton(LineSearches):
     def _set_changes(self) -> int:
         """In how many of the last failures.WINDOW iterations the contact set changed on any rank
         (collective; 0 without contact)."""
-        if not self._contacts:
+        if not self.contacts:
             return 0
         sets = self._sets[-(failures.WINDOW + 1):]
         changed = np.array([int(a != b) for a, b in zip(sets, sets[1:])] +
@@ -284,7 +284,7 @@ class Newton(LineSearches):
         except (InvertedElement, ReturnMapFailure) as err:
             return self._fail(failures.INADMISSIBLE, 0, str(err))
         self._residuals.append(r0)
-        if self._contacts:
+        if self.contacts:
             self._sets.append(self._contact_set())
         if s.scale == "initial":
             self.residual_scale = max(self.residual_scale, r0)
@@ -316,7 +316,7 @@ class Newton(LineSearches):
                 log.info("    Newton %2d: step scaled by %g", it, alpha)
             self.history.append((rnorm, dnorm))
             self._residuals.append(rnorm)
-            if self._contacts:
+            if self.contacts:
                 self._sets.append(self._contact_set())
             log.info("    Newton %2d: |R| = %.3e (rel %.1e), |du| = %.3e", it, rnorm,
                      rnorm / max(self.residual_scale, 1e-300), dnorm)
