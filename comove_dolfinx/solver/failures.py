@@ -81,7 +81,7 @@ class Failure:
 
 def advice(failure: Failure | None, *, contact: bool = False, friction: bool = False,
            predictor: bool = True, force_controlled: bool = False, target: float | None = None,
-           n: int | None = None) -> str:
+           n: int | None = None, line_search: bool = False) -> str:
     """What to change, as one sentence, after ``failure`` stopped a run at its smallest increment.
 
     Parameters
@@ -100,6 +100,8 @@ def advice(failure: Failure | None, *, contact: bool = False, friction: bool = F
         a steadily falling residual still needed.
     n
         The step's nominal number of increments.
+    line_search
+        Whether Newton already scales its corrections by a line search (else one is suggested).
     """
     if failure is None:
         return ""
@@ -123,7 +125,8 @@ def advice(failure: Failure | None, *, contact: bool = False, friction: bool = F
                 f"{failure.max_it} to about {raise_to}")
     limit = ("; the load may have reached the body's limit load, which a force-controlled step "
              "cannot pass: prescribe a displacement instead") if force_controlled else ""
+    search = "" if line_search else ", or a line search (NewtonSettings line_search=\"residual\")"
     if failure.cause == DIVERGED:
-        return f"Newton diverged: take {more}, or a line search (NewtonSettings line_search=\"residual\"){limit}"
+        return f"Newton diverged: take {more}{search}{limit}"
     stick = " (with friction the stick/slip states may be switching: lower gamma0)" if friction else ""
-    return f"the residual stalled{stick}: take {more}, or a line search{limit}"
+    return f"the residual stalled{stick}: take {more}{search}{limit}"

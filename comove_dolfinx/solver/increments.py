@@ -310,7 +310,8 @@ class IncrementalSolver:
                     result.advice = failures.advice(
                         failure, contact=bool(self.newton.contacts), friction=self._friction(),
                         predictor=use_pred, force_controlled=_force_controlled(m.items),
-                        target=self.newton.tolerance, n=st.n_steps)
+                        target=self.newton.tolerance, n=st.n_steps,
+                        line_search=self.newton.line_search is not None)
                     result.message = (f"stopped at load factor {t:.6g}: an increment of the "
                                       f"smallest size ({dt:.3g}, after {cut} cut-backs in a row)"
                                       f" failed: {reason}" + (f"; {result.advice}" if result.advice else ""))
