@@ -92,7 +92,7 @@ class RunInfo(Writer):
     def _info(self, run, status: str, message: str, results=None) -> str:
         info = {"parameters": self.parameters, "status": status, "completed": status == "completed",
                 "message": message, "increments": self.rows, "ranks": run.comm.size,
-                "warnings": list(run.warnings)}
+                "warnings": list(run.warnings), "failures": run.failures}
         if results is not None:
             info.update(increments=len(results.increments), newton_its=results.newton_its,
                         failed_its=results.failed_its, failures=dict(results.failures),
