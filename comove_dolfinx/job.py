@@ -187,7 +187,9 @@ _IMPORTED = time.perf_counter()
 
 @dataclass
 class Results:
-    """A job's outcome: the history as columns, the increments, Newton statistics and timing."""
+    """A job's outcome: the history as columns, the increments, Newton statistics, the failed
+    attempts per cause (``failures``, keys of solver/failures.py) with what to change if a step
+    stopped (``advice``), and timing."""
 
     columns: list[str]
     rows: list[dict] = field(default_factory=list)
