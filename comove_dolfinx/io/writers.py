@@ -149,9 +149,9 @@ class Console(Writer):
     def write(self, run, row, inc) -> None:
         self._warn(run)
         extra = ", ".join(f"{k} {row[k]:.5g}" for k in self.columns)
-        cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
-        if getattr(inc, "retries", 0):
-            cut += f" after {inc.retries} retr{'ies' if inc.retries > 1 else 'y'} from the other start"
+        done = ([f"{inc.retries} retr{'ies' if inc.retries > 1 else 'y'} from the other start"] if inc.retries else []) + \
+            ([f"{inc.cutbacks} cut-back(s)"] if inc.cutbacks else [])
+        cut = f" after {' and '.join(done)}" if done else ""
         self._print(run, f"  step {row['step']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
                          f"{extra}  ({inc.wall_s:.2f} s)")
 
