@@ -18,6 +18,8 @@ its message; the results hold every increment converged before.
 """
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
 import time
 from dataclasses import dataclass, field
@@ -49,9 +51,13 @@ class JobError(ValueError):
 class Step:
     """A stage of the loading: ``n`` nominal increments, the factors' targets, increment control.
 
-    ``predictor``: where each increment starts, "none" (the last converged state), "linear" or
-    "quadratic" (extrapolation of the last converged states) or "tangent" (Euler step along the
-    path's tangent, docs/theory.md section 7.2). ``max_cutbacks``: halvings of a failed increment.
+    ``predictor``: where each increment starts, "tangent" (the default: Euler step along the path's
+    tangent), "none" (the last converged state), "linear" or "quadratic" (extrapolation of the last
+    converged states), docs/theory.md section 7.2. ``retry``: a failed increment is tried once more
+    at the same size from the other start (a predictor if it started from the last state, the last
+    state if it started from a predictor) before it is halved; a predictor that rescued an increment
+    begun from the last state is kept for the rest of the step. ``max_cutbacks``: halvings of a
+    failed increment.
     ``first``: the step's first increment as a fraction 1, 1/2, 1/4, ... of the nominal one (at most
     ``max_cutbacks`` halvings), doubled back to it after easy increments: a hard start (a first
     contact and its first yield) at a size that converges instead of failed attempts at the nominal.
@@ -63,11 +69,12 @@ class Step:
 
     n: int = 10
     ramp: dict | None = None
-    predictor: str = "none"
+    predictor: str = "tangent"
     max_cutbacks: int = 6
     name: str = ""
     release: tuple = ()
     first: float = 1.0
+    retry: bool = True
 
     def __post_init__(self):
         self.release = tuple(self.release) if isinstance(self.release, (list, tuple)) else (self.release,)
@@ -82,10 +89,13 @@ class Step:
         why = first_increment_error(self.first, self.max_cutbacks)
         if why:
             raise JobError(why)
+        if not isinstance(self.retry, (bool, np.bool_)):
+            raise JobError(f"retry = {self.retry!r}: give True or False")
 
     def settings(self) -> StepSettings:
         return StepSettings(n_steps=int(self.n), max_cutbacks=self.max_cutbacks,
-                            predictor=PREDICTORS[self.predictor], first=float(self.first))
+                            predictor=PREDICTORS[self.predictor], first=float(self.first),
+                            retry=bool(self.retry))
 
     def check(self, items) -> None:
         """JobError if the step names an item that is not the job's, or releases what is not a
@@ -118,6 +128,44 @@ class Step:
                 item.hold()
 
 
+class _CompilerLines(logging.Filter):
+    """Drops the progress lines of the form compiler's C build (INFO and below, logged on the root
+    logger by the distutils of setuptools that cffi drives) and the INFO of ffcx and UFL; every
+    other record passes."""
+
+    SOURCES = ("distutils", "setuptools", "cffi")
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno >= logging.WARNING:
+            return True
+        if record.name.split(".")[0] in ("ffcx", "UFL", "ufl"):
+            return False
+        path = record.pathname.replace("\\", "/")
+        return not (record.name == "root" and any(f"/{s}" in path for s in self.SOURCES))
+
+
+@contextlib.contextmanager
+def quiet_compilers():
+    """Within the block, the form compiler's INFO lines are not shown; afterwards the root logger
+    has its level back (distutils lowers it to INFO for every later record of the process).
+
+    The user's own logging stays as it was: records of other loggers pass, and the filter comes
+    off when the block ends. :meth:`Job.run` runs inside it."""
+    root = logging.getLogger()
+    level, filt = root.level, _CompilerLines()
+    handlers = list(root.handlers)
+    root.addFilter(filt)                 # records logged on the root logger itself (distutils)
+    for h in handlers:                   # and those that reach its handlers from ffcx's or UFL's
+        h.addFilter(filt)
+    try:
+        yield
+    finally:
+        root.removeFilter(filt)
+        for h in handlers:
+            h.removeFilter(filt)
+        root.setLevel(level)
+
+
 def process_clock() -> tuple[float, float, float]:
     """(wall seconds since this process started, CPU seconds of the process, CPU seconds of the
     child processes it waited for: the C compiler of the form compiler). The start is read from
@@ -139,7 +187,9 @@ _IMPORTED = time.perf_counter()
 
 @dataclass
 class Results:
-    """A job's outcome: the history as columns, the increments, Newton statistics and timing."""
+    """A job's outcome: the history as columns, the increments, Newton statistics, the failed
+    attempts per cause (``failures``, keys of solver/failures.py) with what to change if a step
+    stopped (``advice``), and timing."""
 
     columns: list[str]
     rows: list[dict] = field(default_factory=list)
@@ -154,6 +204,8 @@ class Results:
     contact: dict = field(default_factory=dict)
     interrupted: bool = False       # by a signal or Ctrl-C (the exception goes on after the writers)
     warnings: list = field(default_factory=list)
+    failures: dict = field(default_factory=dict)    # failed attempts per cause (solver/failures.py)
+    advice: str = ""                # what to change, when a step stopped at its smallest increment
 
     def __getitem__(self, column: str) -> np.ndarray:
         if column not in self.columns:
@@ -170,6 +222,27 @@ class Results:
     @property
     def failed_its(self) -> int:
         return sum(inc.failed_its for inc in self.increments)
+
+    @property
+    def cutbacks(self) -> int:
+        """Halvings of increments that then converged (those of a step that stopped are in
+        ``failures`` and the message)."""
+        return sum(inc.cutbacks for inc in self.increments)
+
+    @property
+    def retries(self) -> int:
+        """Failed attempts tried again at the same size from the other start."""
+        return sum(inc.retries for inc in self.increments)
+
+    def failure_summary(self) -> str:
+        """The failed attempts in words, e.g. "3 failed attempts (inadmissible 2, max_it 1), 2
+        cut-backs, 1 retry"; "no failed attempts" if none failed."""
+        n = sum(self.failures.values())
+        if not n:
+            return "no failed attempts"
+        causes = ", ".join(f"{k} {v}" for k, v in sorted(self.failures.items(), key=lambda kv: -kv[1]))
+        return (f"{n} failed attempt{'s' if n != 1 else ''} ({causes}), {self.cutbacks} cut-back"
+                f"{'s' if self.cutbacks != 1 else ''}, {self.retries} retr{'ies' if self.retries != 1 else 'y'}")
 
     @property
     def last(self) -> dict:
@@ -190,6 +263,16 @@ class Run:
     newton: object = None
     step_index: int = 0
     contact_stats: dict = field(default_factory=dict)    # first contact, largest penetration
+    attempts: list = field(default_factory=list)          # each step's RunResult (failed attempts)
+
+    @property
+    def failures(self) -> dict:
+        """Failed attempts per cause so far (those of the run restarted from among them)."""
+        out: dict = {}
+        for rr in self.attempts:
+            for cause, count in rr.failures.items():
+                out[cause] = out.get(cause, 0) + count
+        return out
 
     @property
     def comm(self):
@@ -221,7 +304,12 @@ class Job:
 
     def run(self, progress: bool = False, restart=None) -> Results:
         """Compile, run every step, write; returns the :class:`Results` (also when a step fails).
-        ``restart``: a checkpoint folder (io.Checkpoint) to go on from, on any number of ranks."""
+        ``restart``: a checkpoint folder (io.Checkpoint) to go on from, on any number of ranks.
+        The form compiler's INFO lines are not shown (:func:`quiet_compilers`)."""
+        with quiet_compilers():
+            return self._run(progress, restart)
+
+    def _run(self, progress: bool, restart) -> Results:
         t_start, before = time.perf_counter(), process_clock()[0]
         timer = Timer()
         for item in self.items:              # the same items may serve an earlier run
@@ -252,6 +340,8 @@ class Job:
             stats.update(saved[0].get("contact", {}))
             run.warnings = list(saved[0].get("warnings", []))
         run.contact_stats = stats
+        if saved is not None:                # the failed attempts before the checkpoint
+            run.attempts.append(RunResult(failures=dict(saved[0].get("failures", {}))))
         with timer("output"):
             for w in self.writers:
                 collective(comm, w.open, run)
@@ -279,6 +369,7 @@ class Job:
                         resume = checkpoint.restore(*saved, model, newton)
                         saved = None
                     rr, last = RunResult(), 0.0
+                    run.attempts.append(rr)
                     for inc in solver.increments(rr, resume):
                         t = k + inc.load
                         row = {"step": len(res.rows) + 1, "time": t,
@@ -302,6 +393,7 @@ class Job:
                         bar.update(inc.load - last)
                         last = inc.load
                     if not rr.completed:
+                        res.advice = rr.advice
                         name = f" {step.name!r}" if step.name else ""
                         res.message = f"step {k + 1}{name}: {rr.message}" if len(self.steps) > 1 else rr.message
                         break
@@ -316,6 +408,7 @@ class Job:
             newton.poll = None
             bar.close()
             res.wall_s = time.perf_counter() - t_start
+            res.failures = run.failures
             self._account(res, timer, before)
             res.contact = stats if contacts else {}
             self._check_workspace(run)             # also when no increment converged

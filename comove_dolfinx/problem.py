@@ -190,7 +190,7 @@ def read(path) -> dict:
     steps = data.get("steps", [{}])
     for k, step in enumerate(steps, 1):
         _check(f"{path}: [[steps]] {k}", step, {"n": int, "predictor": str, "max_cutbacks": int, "ramp": dict,
-                                                "name": str, "release": list, "first": float})
+                                                "name": str, "release": list, "first": float, "retry": bool})
         why = first_increment_error(step.get("first", 1.0), step.get("max_cutbacks", 6))
         if why:
             raise ProblemError(f"{path}: [[steps]] {k}: {why}")
@@ -258,9 +258,9 @@ def build(data: dict, comm, writers=()):
             item = cls(**s)
         named[name] = item
     steps = [Step(st.get("n", 10), ramp={named[k]: v for k, v in st["ramp"].items()} if "ramp" in st else None,
-                  predictor=st.get("predictor", "none"), max_cutbacks=st.get("max_cutbacks", 6),
+                  predictor=st.get("predictor", Step.predictor), max_cutbacks=st.get("max_cutbacks", 6),
                   name=st.get("name", ""), release=[named[k] for k in st.get("release", [])],
-                  first=st.get("first", 1.0))
+                  first=st.get("first", 1.0), retry=st.get("retry", Step.retry))
              for st in data["steps"]]
     plist = []
     for spec in data.get("probes", []):

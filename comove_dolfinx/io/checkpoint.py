@@ -148,9 +148,10 @@ class Checkpoint(Writer):
             put("u_factorised", ("V", newton.u_factorised))
         meta = {"increment": n, "ranks": comm.size, "step_index": run.step_index,
                 "resume": {"t": rs["t"], "dt": rs["dt"], "step": rs["step"], "easy": rs["easy"],
-                           "past_t": [t for t, _ in rs["past"]]},
+                           "past_t": [t for t, _ in rs["past"]], "use_pred": bool(rs["use_pred"])},
                 "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
                 "rows": list(run.job_rows), "contact": dict(run.contact_stats), "warnings": list(run.warnings),
+                "failures": run.failures,
                 "kinds": kinds}
         return n, _pack(arrays), meta              # (packing copies the arrays; the lists are copied)
 

@@ -75,7 +75,9 @@ def write_atomic(path: pathlib.Path, text: str) -> None:
 
 
 class RunInfo(Writer):
-    """``path`` (JSON): the job's parameters, outcome, increments, Newton iterations, timing and,
+    """``path`` (JSON): the job's parameters, outcome, increments, Newton iterations, the failed
+    attempts per cause (``failures``), the cut-backs and retries, what to change if the run stopped
+    (``advice``), timing and,
     with contact, the load at first contact and the largest penetration. Written when the run
     starts (``"status": "running"``) and after an increment at most every ``interval`` seconds, so
     that a run that is killed leaves a summary that says it is incomplete and about how far it got
@@ -90,10 +92,12 @@ class RunInfo(Writer):
     def _info(self, run, status: str, message: str, results=None) -> str:
         info = {"parameters": self.parameters, "status": status, "completed": status == "completed",
                 "message": message, "increments": self.rows, "ranks": run.comm.size,
-                "warnings": list(run.warnings)}
+                "warnings": list(run.warnings), "failures": run.failures}
         if results is not None:
             info.update(increments=len(results.increments), newton_its=results.newton_its,
-                        failed_its=results.failed_its, dofs=results.dofs, wall_s=results.wall_s,
+                        failed_its=results.failed_its, failures=dict(results.failures),
+                        cutbacks=results.cutbacks, retries=results.retries, advice=results.advice,
+                        dofs=results.dofs, wall_s=results.wall_s,
                         timing=results.timing, process=results.process, **results.contact)
         return json.dumps(info, indent=1, default=str)
 
@@ -119,7 +123,9 @@ class RunInfo(Writer):
 
 
 class Console(Writer):
-    """One line per increment (load, Newton iterations, the named columns) and a summary."""
+    """One line per increment (load, Newton iterations, the named columns) and a summary: the
+    message, the Newton iterations, the failed attempts per cause with the cut-backs and retries,
+    the wall time."""
 
     def __init__(self, title: str = "", columns=()):
         self.title, self.columns = title, tuple(columns)
@@ -143,7 +149,9 @@ class Console(Writer):
     def write(self, run, row, inc) -> None:
         self._warn(run)
         extra = ", ".join(f"{k} {row[k]:.5g}" for k in self.columns)
-        cut = f" after {inc.cutbacks} cut-back(s)" if inc.cutbacks else ""
+        done = ([f"{inc.retries} retr{'ies' if inc.retries > 1 else 'y'} from the other start"] if inc.retries else []) + \
+            ([f"{inc.cutbacks} cut-back(s)"] if inc.cutbacks else [])
+        cut = f" after {' and '.join(done)}" if done else ""
         self._print(run, f"  step {row['step']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
                          f"{extra}  ({inc.wall_s:.2f} s)")
 
@@ -152,7 +160,7 @@ class Console(Writer):
         its = results.newton_its
         self._print(run, f"{self.title}: {results.message}; Newton iterations mean "
                          f"{(sum(its) / len(its)) if its else 0:.2f}, max {max(its) if its else 0}; "
-                         f"wall {results.wall_s:.2f} s")
+                         f"{results.failure_summary()}; wall {results.wall_s:.2f} s")
         self._print(run, results.timing_report)
         c = results.contact
         if c:

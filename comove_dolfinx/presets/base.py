@@ -46,6 +46,8 @@ class Scene:
         "predictor": "start of each increment: none (the last converged state), linear or quadratic "
                      "(extrapolation of the last converged states), tangent (Euler step along the "
                      "path's tangent)",
+        "retry": "try a failed increment once more from the other start (predictor or last state) "
+                 "before halving it",
     }
 
     E: float = 1000.0
@@ -59,6 +61,7 @@ class Scene:
     first: float = 1.0
     mesh: str = ""
     predictor: str = "none"
+    retry: bool = False
 
     # -- parameters --------------------------------------------------------------------------
     def validate(self) -> None:
@@ -154,7 +157,8 @@ class Scene:
     def steps(self) -> list:
         """One step: every item from 0 to 1 in n_steps nominal increments."""
         from ..job import Step
-        return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks, first=self.first)]
+        return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks, first=self.first,
+                     retry=self.retry)]
 
     def job(self, md, writers=()):
         """The scene as a job on the mesh ``md`` (history ``load`` = load factor x load_max)."""

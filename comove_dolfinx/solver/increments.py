@@ -10,8 +10,19 @@ extrapolation it knows where the path is heading at t_n, not where it came from;
 increment of a job, before any factorisation, starts from the unloaded state, the first of a later
 step from the tangent at the state where the step before ended.
 An iterate that stays inadmissible, ``max_it`` iterations, or a residual that grows by
-``divergence`` over the increment's first fails the increment; the loop then restores the last
-converged state and halves the increment, down to the smallest increment dt_nom / 2^max_cutbacks;
+``divergence`` over the increment's first fails the attempt; the loop restores the last converged
+state (and the run's residual scale: a failed attempt is no measure of its forces). With ``retry``
+the attempt is made once more at the same size from the other start: from the predictor (the
+tangent, else the linear extrapolation) if it began at the last state, from the last state if a
+predictor led it astray. Begun from the last state, the first iteration of an elastic-plastic
+increment sees no strain increment, so every point that was yielding is elastic in its tangent
+(the trial stress lies on the yield surface, not beyond it), and a body that flows plastically
+can be sent far off: a predictor that rescues such an increment is kept for the rest of the step.
+A predictor fails where the path changes its regime (a first contact, a first yield, an
+unloading), which the past states cannot foresee; the last state that rescues such an increment
+serves that increment only. Every failed attempt is counted by its cause (failures.py). Otherwise,
+or if the retry fails too, the loop halves the increment, down to the smallest increment
+dt_nom / 2^max_cutbacks;
 when an increment of that size fails, the run stops cleanly (every converged increment has already
 been handed out). A linear solver that fails for want of memory or of a feature of its build
 (newton.py, ``hopeless``) stops the run at once: halving would fail the same way. The floor is
@@ -37,6 +48,7 @@ from mpi4py import MPI
 from ..mechanics.model import Model
 from ..names import first_increment_error
 from ..parallel import collective
+from . import failures
 from .newton import Newton, NewtonSettings, Timer
 
 log = logging.getLogger("comove")
@@ -66,6 +78,26 @@ def _path_rate(points) -> np.ndarray:
     return chord + (t2 - t1) * (chord - (u1 - u0) / (t1 - t0)) / (t2 - t0)
 
 
+def _force_controlled(items) -> bool:
+    """Whether every item that moves over the step is a load (a pressure, traction, body or point
+    force, a released support's force), with no prescribed displacement and no moving obstacle: such
+    a step cannot pass a maximum of the load (a limit load)."""
+    loads = False
+    for item in items:
+        if all(item.factor_at(s) == item.factor_at(0.0) for s in (0.5, 1.0)):
+            continue
+        if item.kind == "load" or getattr(item, "released", False):
+            loads = True
+        elif item.kind == "contact":
+            d = [np.asarray(item.obstacle.displacement(item.factor_at(s)), dtype=float) for s in (0.0, 0.5, 1.0)]
+            if not all(np.array_equal(d[0], v) for v in d[1:]):
+                return False
+        elif getattr(item, "field", None) is not None or np.any(np.asarray(
+                getattr(item, "value", None) if getattr(item, "value", None) is not None else 0.0) != 0.0):
+            return False              # a prescribed displacement (Fixed prescribes none)
+    return loads
+
+
 @dataclass
 class StepSettings:
     """Increment control: nominal number of equal increments over the load range, cut-back, growth."""
@@ -82,6 +114,9 @@ class StepSettings:
                                    # nominal one (then doubled back after easy increments, as after a
                                    # cut-back): a hard start (a first contact, a first yield) at a smaller
                                    # size instead of failed attempts at the nominal one
+    retry: bool = False            # a failed increment is tried once more at the same size from the
+                                   # other start (a predictor if it started from the last state, the
+                                   # last state if it started from a predictor) before it is halved
     chord_tol: float = 0.1         # "tangent": take the last chord c instead when |v - r| > chord_tol |c|,
                                    # r the rate of the quadratic through the last three converged
                                    # states (the chord while there are two). Measured per node on
@@ -98,8 +133,9 @@ class Increment:
     load: float
     newton_its: int               # iterations of the converged attempt
     wall_s: float                 # wall time since the previous increment, failed attempts included
-    cutbacks: int = 0
+    cutbacks: int = 0             # halvings of this increment before the attempt that converged
     failed_its: int = 0           # iterations spent in failed attempts of this increment
+    retries: int = 0              # failed attempts tried again at the same size from the other start
 
 
 @dataclass
@@ -107,6 +143,9 @@ class RunResult:
     increments: list[Increment] = field(default_factory=list)
     completed: bool = False
     message: str = ""
+    failures: dict = field(default_factory=dict)   # failed attempts per cause (failures.CAUSES)
+    last_failure: failures.Failure | None = None
+    advice: str = ""              # what to change, when the run stopped at its smallest increment
 
     @property
     def newton_its(self) -> list[int]:
@@ -154,6 +193,10 @@ class IncrementalSolver:
         diff2, chord2 = sums
         return bool(diff2 <= self.steps.chord_tol ** 2 * chord2)
 
+    def _friction(self) -> bool:
+        """Whether a contact item of the model has friction."""
+        return any(float(getattr(item, "mu", 0.0) or 0.0) > 0.0 for item in self.newton.contacts)
+
     def run(self, callbacks=(), progress=None) -> RunResult:
         """Run every increment; each callback(model, increment) is called after every converged one
         (a failure of a callback on one rank stops every rank). ``progress``: optional object with
@@ -187,7 +230,8 @@ class IncrementalSolver:
         # the tangent's fallback is the linear extrapolation (the chord); it keeps the last three
         # states, which its check compares it with (_agrees_with_path)
         order = 1 if tangent else int(st.predictor)
-        keep = 2 if tangent else order
+        alt = 1 if (st.retry and order == 0) else order     # the extrapolation of a predictor start
+        keep = 2 if tangent else alt
         rate, have_rate = fem.Function(m.V) if tangent else None, False
         if tangent and self.newton.factorised:
             # a later step of a job: the path's tangent at the state where the last step ended
@@ -201,59 +245,98 @@ class IncrementalSolver:
             if tangent and self.newton.factorised:
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
                              and self._agrees_with_path(rate, past))
-        t_mark, failed_its = time.perf_counter(), 0
+        # where an attempt starts: from a predictor (``use_pred``) or the last converged state. With
+        # ``retry`` a failed attempt is tried once more at the same size from the other start before
+        # the increment is halved. A predictor that rescues an increment begun from the last state
+        # is kept from then on (that start fails for a lasting reason: its first tangent is elastic
+        # where the body flows plastically); the last state that rescues one a predictor led astray
+        # serves that increment only (a predictor fails at a change of regime the past states could
+        # not foresee: a first contact, a first yield, an unloading)
+        use_pred = bool(st.predictor) if resume is None else bool(resume.get("use_pred", st.predictor))
+        t_mark, failed_its, retried, retries = time.perf_counter(), 0, False, 0
+        pred_now = use_pred
         tol = 1e-12 * st.t_end
         while t < st.t_end - tol:
             dt = min(dt, st.t_end - t)
             t_try = t + dt
             m.set_load(t_try)
-            if have_rate:
+            started = "last state"
+            if pred_now and have_rate:
                 m.u.x.array[:] = m.u_n.x.array + (t_try - t) * rate.x.array
-            elif order and len(past) > 1:
-                m.u.x.array[:] = _extrapolate(past[-(order + 1):], t_try)
+                started = "tangent"
+            elif pred_now and alt and len(past) > 1:
+                m.u.x.array[:] = _extrapolate(past[-(alt + 1):], t_try)
+                started = "extrapolation"
+            scale = self.newton.residual_scale
             ok, its, reason = self.newton.solve()
+            failure = self.newton.failure
             passes = 1
             while ok and passes < self.max_passes and any([item.relag_pass() for item in self.relaggers]):
                 ok, more, reason = self.newton.solve()     # true Coulomb: re-lag the pressure
+                failure = self.newton.failure
                 its += more
                 passes += 1
             if ok:
                 folded = m.folded_at_nodes()
                 if folded is not None:
                     ok, reason = False, folded
+                    failure = failures.Failure(failures.INADMISSIBLE, folded, max_it=self.newton.settings.max_it)
             if not ok:
                 m.restore()
+                # a failed attempt is no measure of the run's forces: an extrapolation that led it
+                # astray can start it at a residual many times the load increment's
+                self.newton.residual_scale = scale
                 if from_start:
                     have_rate = from_start = False
-                cut += 1
                 failed_its += its
-                log.info("  increment to t = %.6g failed (%s)", t_try, reason)
+                cause = failure.cause if failure is not None else failures.MAX_IT
+                result.failures[cause] = result.failures.get(cause, 0) + 1
+                result.last_failure = failure
+                log.info("  increment to t = %.6g from the %s failed (%s)", t_try, started, reason)
                 if self.newton.hopeless:          # the linear solver's memory or build: no
                     m.set_load(t)                 # smaller increment helps
                     result.message = (f"stopped at load factor {t:.6g}: an increment failed in a way "
                                       f"no smaller increment cures: {reason}")
                     return
+                # the other start, once per increment: a predictor if the attempt started from the
+                # last state, the last state if a predictor led it astray
+                other = (have_rate or (alt and len(past) > 1)) if started == "last state" else True
+                if st.retry and not retried and other:
+                    retried, retries = True, retries + 1
+                    pred_now = started == "last state"
+                    continue
                 if dt <= dt_min * (1.0 + 1e-9):
                     m.set_load(t)
+                    result.advice = failures.advice(
+                        failure, contact=bool(self.newton.contacts), friction=self._friction(),
+                        predictor=use_pred, force_controlled=_force_controlled(m.items),
+                        target=self.newton.tolerance, n=st.n_steps,
+                        line_search=self.newton.line_search is not None)
                     result.message = (f"stopped at load factor {t:.6g}: an increment of the "
-                                      f"smallest size ({dt:.3g}, after {cut - 1} cut-backs in a row)"
-                                      f" failed: {reason}")
+                                      f"smallest size ({dt:.3g}, after {cut} cut-backs in a row)"
+                                      f" failed: {reason}" + (f"; {result.advice}" if result.advice else ""))
                     return
                 dt *= 0.5
+                cut += 1
                 easy = 0
+                pred_now = use_pred
                 continue
+            if retried and pred_now and not use_pred:
+                log.info("  the increments start from the predictor from now on")
+                use_pred = True
             t, step = t_try, step + 1
-            inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its)
+            inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its, retries)
             result.increments.append(inc)
-            cut, failed_its = 0, 0
+            cut, failed_its, retried, retries = 0, 0, False, 0
+            pred_now = use_pred
             # where the loop goes on from (computed before the consumer sees the increment)
-            past_next = past[-keep:] + [(t, m.u.x.array.copy())] if order else past
+            past_next = past[-keep:] + [(t, m.u.x.array.copy())] if keep else past
             easy_next, dt_next = easy + 1 if its <= st.easy_its else 0, dt
             # grow back towards the nominal increment, staying on the grid of the doubled step
             if easy_next >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
                 dt_next, easy_next = min(2 * dt, dt_nom), 0
             self.resume_state = {"t": t, "dt": dt_next, "step": step, "easy": easy_next,
-                                 "past": past_next}
+                                 "past": past_next, "use_pred": use_pred}
             yield inc
             m.commit()
             past = past_next

@@ -18,6 +18,11 @@ step counts). Corrections are scaled by the line searches of linesearch.py. A fa
 linear solve on any rank (an error, a negative PETSc reason, a correction that is not finite) is a
 failed iteration on every rank. docs/theory.md section 7.
 
+A failed solve leaves ``Newton.failure`` (failures.py): its cause (an inadmissible iterate,
+``max_it``, divergence, the linear solver), the residual norms of its iterates and, with contact, in
+how many of the last iterations the active contact set (the boundary nodes with a negative gap)
+changed; the increment loop counts the causes and names a remedy from them.
+
 Observation: ``NewtonSettings.monitor`` is an object with any of the methods
 
 * ``iteration(newton, it, rnorm)``: at each residual test (rtol, atol) of an accepted iterate, after
@@ -46,7 +51,7 @@ from petsc4py import PETSc
 
 from .. import compat
 from ..mechanics.model import InvertedElement, Model, ReturnMapFailure
-from . import linear
+from . import failures, linear
 from .linesearch import LineSearches
 
 log = logging.getLogger("comove")
@@ -146,6 +151,11 @@ class Newton(LineSearches):
         self.history: list[tuple[float, float]] = []
         self.poll = None                   # called by every rank before each iteration (a job's
                                            # collective check for Ctrl-C and SIGTERM: parallel.py)
+        self.failure: failures.Failure | None = None     # of the last solve, None if it converged
+        self.contacts = [item for item in model.items if item.kind == "contact"]   # the model's contact items
+        self._X = None                     # the dofs' reference coordinates (contact sets)
+        self._residuals: list[float] = []
+        self._sets: list = []
 
     def residual(self, again: bool = False) -> float:
         """Assemble -R (with the Dirichlet rows set to the constraint violation) into b; its norm.
@@ -231,13 +241,51 @@ class Newton(LineSearches):
         self._notify("solved", ok, its, reason)
         return ok, its, reason
 
+    def _fail(self, cause: str, its: int, reason: str) -> tuple[bool, int, str]:
+        """Record the failed attempt (``failure``: its cause, the residuals of its iterates, how
+        often the contact set changed) and return what :meth:`solve` returns."""
+        self.failure = failures.Failure(cause, reason, list(self._residuals), self._set_changes(),
+                                        self.settings.max_it)
+        return False, its, reason
+
+    def _contact_set(self) -> bytes | None:
+        """The contact boundaries' nodes with a negative gap at the current iterate (this rank's
+        nodes, as bytes of a boolean mask), or None without contact. Local, no collective call."""
+        if not self.contacts:
+            return None
+        if self._X is None:
+            self._X = self.model.V.tabulate_dof_coordinates()[:, :2]
+        xu = self.model.u.x.array.reshape(-1, 2)
+        parts = []
+        for item in self.contacts:
+            nodes = item.nodes
+            g = item.obstacle.gap_np(self._X[nodes] + xu[nodes], item.obstacle.displacement(item.factor))
+            parts.append(np.asarray(g) < 0.0)
+        return np.concatenate(parts).tobytes() if parts else b""
+
+    def _set_changes(self) -> int:
+        """In how many of the last failures.WINDOW iterations the contact set changed on any rank
+        (collective; 0 without contact)."""
+        if not self.contacts:
+            return 0
+        sets = self._sets[-(failures.WINDOW + 1):]
+        changed = np.array([int(a != b) for a, b in zip(sets, sets[1:])] +
+                           [0] * (failures.WINDOW - max(len(sets) - 1, 0)), dtype=np.int32)
+        self.model.comm.Allreduce(MPI.IN_PLACE, changed, op=MPI.MAX)
+        return int(changed.sum())
+
     def _iterate(self) -> tuple[bool, int, str]:
         m, s = self.model, self.settings
         self.history = []
+        self.failure = None
+        self._residuals, self._sets = [], []
         try:
             r0 = rnorm = self.residual()
         except (InvertedElement, ReturnMapFailure) as err:
-            return False, 0, str(err)
+            return self._fail(failures.INADMISSIBLE, 0, str(err))
+        self._residuals.append(r0)
+        if self.contacts:
+            self._sets.append(self._contact_set())
         if s.scale == "initial":
             self.residual_scale = max(self.residual_scale, r0)
         for it in range(1, s.max_it + 1):
@@ -251,11 +299,11 @@ class Newton(LineSearches):
             with self.timer("solve"):
                 failure = self._solve_linear()
             if failure is not None:
-                return False, it, failure
+                return self._fail(failures.LINEAR, it, failure)
             self.factorised = True
             dnorm = self._du_vec.norm()
             if not np.isfinite(dnorm):
-                return False, it, "the Newton correction is not finite (singular tangent?)"
+                return self._fail(failures.LINEAR, it, "the Newton correction is not finite (singular tangent?)")
             self._notify("correction", it)
             if self.line_search == "energy":
                 self.b.copy(self._b_old)
@@ -263,18 +311,28 @@ class Newton(LineSearches):
             else:
                 rnorm, alpha, err = self._line_search(rnorm, armijo=it > s.free_its)
             if err is not None:
-                return False, it, str(err)
+                return self._fail(failures.INADMISSIBLE, it, str(err))
             if alpha < 1.0:
                 log.info("    Newton %2d: step scaled by %g", it, alpha)
             self.history.append((rnorm, dnorm))
+            self._residuals.append(rnorm)
+            if self.contacts:
+                self._sets.append(self._contact_set())
             log.info("    Newton %2d: |R| = %.3e (rel %.1e), |du| = %.3e", it, rnorm,
                      rnorm / max(self.residual_scale, 1e-300), dnorm)
             if not np.isfinite(rnorm) or rnorm > s.divergence * max(r0, s.atol):
-                return False, it, f"diverged (|R| = {rnorm:.3e})"
+                return self._fail(failures.DIVERGED, it, f"diverged (|R| = {rnorm:.3e})")
             if alpha == 1.0 and dnorm <= s.stol * self._u_vec.norm():
                 return True, it, "converged"
         converged = self._converged(rnorm, s.max_it)
-        return converged, s.max_it, "converged" if converged else f"no convergence in {s.max_it} iterations"
+        if converged:
+            return True, s.max_it, "converged"
+        return self._fail(failures.MAX_IT, s.max_it, f"no convergence in {s.max_it} iterations")
+
+    @property
+    def tolerance(self) -> float:
+        """The residual norm the last solve had to reach (rtol times its scale plus atol)."""
+        return self.settings.rtol * self.residual_scale + self.settings.atol
 
     def along(self, steps, look=None) -> list[tuple]:
         """(a, s(a), f(a), seen) for each step a along the current correction du: s(a) = du . R(u +
