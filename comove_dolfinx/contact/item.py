@@ -6,18 +6,18 @@ model's facet traction (docs/theory.md section 6).
 
 Friction (``mu > 0``) has two laws, chosen by ``friction``:
 
-* ``"coulomb"`` (the default): the slip threshold is mu times the pressure of the current iterate,
-  solved in the same Newton loop as everything else (the threshold's derivative is in the Jacobian,
-  which is then unsymmetric);
-* ``"lagged"`` (Shang and Chen's scheme): the threshold is mu times the pressure of a lag state, the
+* ``"lagged"`` (the default; Shang and Chen's scheme): the threshold is mu times the pressure of a lag state, the
   body at u_lag against the obstacle where it stood then: the converged state of the last increment,
   or with ``relag`` the state of the last pass within the increment, repeated until the pressure
   settles. The lag state depends on converged data only, and its pressure is the pressure that state
   converged with, to round-off: Nitsche's stress at u_lag is evaluated from the converged state u_lag
-  was solved from (a FacetBase), not from the one after it.
+  was solved from (a FacetBase), not from the one after it;
+* ``"coulomb"``: the slip threshold is mu times the pressure of the current iterate, solved in the
+  same Newton loop as everything else (the threshold's derivative is in the Jacobian, which is then
+  unsymmetric).
 
-The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = gamma0 / 10,
-docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
+The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = min(gamma0,
+10), docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
 tangential slip) as a boundary field (a lumped projection at each converged increment); Nitsche's
 lives in the stress.
 
@@ -72,13 +72,14 @@ class Contact(Item):
     relag : bool
         With the lagged law: re-solve each increment with the threshold of its own solution until
         the pressure changes by less than ``relag_tol`` (at most ``max_passes`` passes).
-    friction : "coulomb", "lagged" or None
-        The slip threshold mu p: "coulomb" takes p of the current iterate (in the same Newton loop),
-        "lagged" the pressure of the last converged increment (Shang and Chen's scheme; with
-        ``relag``, of the last pass). None: "lagged" with ``relag``, else "coulomb".
+    friction : "lagged" or "coulomb"
+        The slip threshold mu p: "lagged" (the default) takes the pressure of the last converged
+        increment (Shang and Chen's scheme; with ``relag``, of the last pass), "coulomb" p of the
+        current iterate (in the same Newton loop). docs/theory.md section 6.3 says why lagged is
+        the default.
     gamma0_t : float or None
         Dimensionless weight of the tangential (friction) term, gamma_t = gamma0_t E / h; None:
-        gamma0 / 10. Penalty: the stick part is elastic with stiffness gamma_t (a slip of q /
+        min(gamma0, 10). Penalty: the stick part is elastic with stiffness gamma_t (a slip of q /
         gamma_t while sticking); Nitsche: consistent for any gamma0_t (docs/theory.md section 6.3).
     """
 
@@ -86,7 +87,7 @@ class Contact(Item):
 
     def __init__(self, boundary: str, obstacle: Obstacle, method: str = "penalty",
                  gamma0: float = 100.0, theta: int = 0, mu: float = 0.0, relag: bool = False,
-                 max_passes: int = 10, relag_tol: float = 1e-4, friction: str | None = None,
+                 max_passes: int = 10, relag_tol: float = 1e-4, friction: str = "lagged",
                  gamma0_t: float | None = None):
         super().__init__(boundary)
         if method not in METHODS:
@@ -99,18 +100,16 @@ class Contact(Item):
             raise ContactError(f"mu = {mu}: the friction coefficient must be a finite number >= 0")
         if not isinstance(obstacle, Obstacle):
             raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile")
-        if friction is None:
-            friction = "lagged" if relag else "coulomb"
         if friction not in FRICTION_LAWS:
             raise ContactError(f"friction = {friction!r} is unknown: choose coulomb (the current pressure) "
                                "or lagged (the last increment's)")
         if relag and friction != "lagged":
-            raise ContactError("relag = True re-solves the lagged law: give friction='lagged' (or leave "
-                               "friction out)")
+            raise ContactError("relag = True re-solves the lagged law: give friction='lagged' or "
+                               "relag=False")
         if gamma0_t is None:
-            gamma0_t = gamma0 / 10.0
+            gamma0_t = min(gamma0, 10.0)
         if not (isinstance(gamma0_t, (int, float)) and np.isfinite(gamma0_t) and gamma0_t > 0):
-            raise ContactError(f"gamma0_t = {gamma0_t!r} must be a finite number > 0 (or None: gamma0 / 10)")
+            raise ContactError(f"gamma0_t = {gamma0_t!r} must be a finite number > 0 (or None: min(gamma0, 10))")
         self.boundary, self.obstacle, self.method = boundary, obstacle, method
         self.gamma0, self.theta, self.mu = gamma0, theta, mu
         self.friction, self.gamma0_t = friction, float(gamma0_t)

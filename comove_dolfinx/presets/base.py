@@ -190,7 +190,7 @@ class ContactScene(Scene):
         "theta": "Nitsche variant: 1 symmetric, 0, -1 skew-symmetric",
         "relag": "with friction = lagged: re-solve each increment until the lagged pressure settles",
         "friction": "friction law: lagged (the paper's scheme, tangential weight gamma0) or coulomb "
-                    "(current pressure, tangential weight gamma0 / 10)"}
+                    "(current pressure, tangential weight min(gamma0, 10))"}
 
     gap: float = 1.0
     mu: float = 0.1
