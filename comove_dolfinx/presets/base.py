@@ -217,6 +217,13 @@ class ContactScene(Scene):
         if self.relag and self.friction != "lagged":
             raise SceneError("relag = true re-solves the lagged law: set friction = lagged")
 
+    def newton_settings(self):
+        """The paper's friction scheme keeps the line search on ||R|| that its stored histories
+        were computed with (tests/reference); the solver's default with friction is the energy's."""
+        from ..solver import NewtonSettings
+        paper = self.contact != "off" and self.friction == "lagged"
+        return NewtonSettings(line_search="residual" if paper else None)
+
     def contact_item(self, boundary: str, obstacle):
         """The contact item of the scene's parameters (None when contact = off)."""
         from ..contact import Contact
