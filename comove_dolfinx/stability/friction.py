@@ -69,7 +69,7 @@ def hertz_slide(gamma0: float, n_slide: int, size_contact: float = 0.02, monitor
 
 def friction_panels() -> list[Panel]:
     rows = [(label, []) for label, *_ in FRICTION_ROWS]
-    return [Panel(f"Hertz slide (mu = {MU:g}): method and friction law x gamma0 (10 + 20 increments)",
+    return [Panel(f"Hertz slide (μ = {MU:g}): method and law x gamma0 (10 + 20 increments)",
                   rows, [(f"{g:g}", []) for g in FRICTION_GAMMA0], "gamma0"),
             Panel("Hertz slide: method and friction law x sliding increments (gamma0 = 100)",
                   rows, [(f"{n}", []) for n in FRICTION_SLIDES], "n_slide")]
