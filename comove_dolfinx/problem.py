@@ -64,7 +64,7 @@ ITEMS = {"fixed": {"boundary": str, "component": int},
          "body_force": {"vector": "vector"},
          "point_load": {"point": "vector", "vector": "vector"},
          "contact": {"boundary": str, "obstacle": dict, "method": str, "gamma0": float, "theta": int,
-                     "mu": float, "relag": bool}}
+                     "mu": float, "relag": bool, "friction": str, "gamma0_t": float}}
 OBSTACLES = {"plane": {"point": "vector", "normal": "vector", "motion": "vector"},
              "circle": {"centre": "vector", "radius": float, "motion": "vector"},
              "profile": {"points": "points", "radius": float, "motion": "vector"},

@@ -152,7 +152,7 @@ def test_block_uniform_pressure(block, method):
         assert max(out.values()) < 1e-8                          # Nitsche: consistent, no penetration
 
 
-def _friction_block(block, mu, pull, relag=False):
+def _friction_block(block, mu, pull, relag=False, friction="lagged"):
     """A dead pressure p on top for t <= 1/2, then a pull on the right face (dead traction or
     displacement). Dead loads keep the equilibrium of the horizontal forces exact: friction = -pull."""
     p = 10.0
@@ -164,7 +164,7 @@ def _friction_block(block, mu, pull, relag=False):
     else:
         pull_item = Displacement("right", amount, component=0)
     pull_item.ramp(lambda t: max(0.0, 2 * t - 1))
-    c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)), mu=mu, gamma0=100.0, relag=relag)
+    c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)), mu=mu, gamma0=100.0, relag=relag, friction=friction)
     m = Model(Body(block, "plane_stress", Elastic(E, NU)), [press, pull_item, c])
     forces, ux = [], {}          # read inside the increment: the slip increment is still visible
 
@@ -188,12 +188,16 @@ def test_friction_stick_and_slip(block):
     slip, p, F = _friction_block(block, mu, ("traction", 0.5 * mu * N / 1.0))
     assert F[0] == pytest.approx(-0.5 * mu * N, rel=1e-8)         # equilibrium
     h = 0.25 * np.sqrt(2)                                         # cell diameter
-    assert slip <= 2 * mu * p / (100.0 * E / h)                   # within the stick spring q / gamma
+    # within the stick spring q / gamma_t, gamma_t = gamma0_t E / h with gamma0_t = min(gamma0, 10)
+    assert slip <= 2 * mu * p / (10.0 * E / h)
     # slip: a prescribed pull far beyond the elastic stick range; T / N -> mu with the pressure of
-    # the previous increment (lagged), exactly mu with the pressure re-lagged to convergence
+    # the previous increment (lagged, the default), exactly mu with the pressure re-lagged to
+    # convergence, and with the current pressure (the coulomb law) to round-off
     slip, p, F = _friction_block(block, mu, ("displacement", 0.05))
     assert slip > 0.01                                            # it really slides
     assert -F[0] / F[1] == pytest.approx(mu, rel=1e-3)
+    slip, p, F = _friction_block(block, mu, ("displacement", 0.05), friction="coulomb")
+    assert -F[0] / F[1] == pytest.approx(mu, rel=1e-9)
     slip, p, F = _friction_block(block, mu, ("displacement", 0.05), relag=True)
     assert -F[0] / F[1] == pytest.approx(mu, rel=1e-6)
 
@@ -210,7 +214,7 @@ def test_lagged_friction_with_a_moving_obstacle(block, method):
     pull = Displacement("right", 0.05, component=0)
     pull.ramp(lambda t: max(0.0, 2 * t - 1))
     c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0), motion=(0.0, 0.01)), method=method, mu=mu,
-                gamma0=100.0 if method == "penalty" else 10.0)
+                gamma0=100.0 if method == "penalty" else 10.0, friction="lagged")
     m = Model(Body(block, "plane_stress", Elastic(E, NU)), [Fixed("top", component=1), pull, c])
     forces = []
     _solve(m, 8, [lambda m, inc: forces.append(c.force())])
@@ -235,7 +239,7 @@ def test_lagged_friction_with_nitsche_and_plasticity(block):
     pull = Displacement("right", 0.05, component=0)
     pull.ramp(lambda t: max(0.0, 2 * t - 1))
     c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0), motion=(0.0, 0.01)), method="nitsche", mu=mu,
-                gamma0=10.0)
+                gamma0=10.0, friction="lagged")
     table = Hardening((0.0, 0.1), (8.0, 20.0))             # yields at 0.8 % strain; the floor gives 1 %
     m = Model(Body(block, "plane_stress", as_material(E, NU, "j2", table)), [Fixed("top", component=1), pull, c])
     forces, lags = [], []                                   # at each converged increment, before its commit
@@ -282,6 +286,12 @@ def test_contact_input_errors(block):
         Contact("bottom", Plane((0, 0), (0, 1)), method="lagrange")
     with pytest.raises(ContactError, match="theta"):
         Contact("bottom", Plane((0, 0), (0, 1)), theta=2)
+    with pytest.raises(ContactError, match="friction = 'tresca' is unknown: choose coulomb"):
+        Contact("bottom", Plane((0, 0), (0, 1)), mu=0.1, friction="tresca")
+    with pytest.raises(ContactError, match="relag = True re-solves the lagged law"):
+        Contact("bottom", Plane((0, 0), (0, 1)), mu=0.1, friction="coulomb", relag=True)
+    with pytest.raises(ContactError, match="gamma0_t = -1.0"):
+        Contact("bottom", Plane((0, 0), (0, 1)), mu=0.1, gamma0_t=-1.0)
     with pytest.raises(ContactError, match="radius"):
         Circle((0, 0), -1.0)
     c = Contact("bottom", Plane((0.0, 0.5), (0.0, 1.0)))        # the plane cuts through the block

@@ -43,12 +43,15 @@ def build(kind, cache, order=2):
         md = geometry.annulus_sector(R_IN, R_OUT, 0.3, order=order, cache_dir=cache)
         return md, math.pi / 4 * (R_OUT**2 - R_IN**2), dict(
             inner=math.pi / 2 * R_IN, outer=math.pi / 2 * R_OUT, xsym=R_OUT - R_IN, ysym=R_OUT - R_IN)
+    if kind == "half_disc":
+        md = geometry.quarter_disc(2.0, 0.4, 0.05, 0.3, order=order, cache_dir=cache, half=True)
+        return md, 2 * math.pi, dict(top=4.0, contact=2 * math.pi)
     md = geometry.quarter_disc(2.0, 0.4, 0.05, 0.3, order=order, cache_dir=cache)
     return md, math.pi, dict(top=2.0, xsym=2.0, contact=math.pi)
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("kind", ["rectangle", "plate", "annulus", "disc"])
+@pytest.mark.parametrize("kind", ["rectangle", "plate", "annulus", "disc", "half_disc"])
 def test_area_and_boundary_lengths(kind, mpi_tmp):
     md, area, lengths = build(kind, mpi_tmp)
     assert md.mesh.geometry.dim == 2 and compat.geometry_degree(md.mesh) == 2
@@ -137,6 +140,7 @@ def test_load_msh_without_physical_groups(mpi_tmp):
     (lambda: geometry.plate_section(10.0, 2.0, 0.0, 0.25), "z_support"),
     (lambda: geometry.quarter_disc(1.0, 0.1, 0.2, 0.3), "size_contact"),
     (lambda: geometry.quarter_disc(1.0, 0.1, 0.01, float("nan")), "contact_zone"),
+    (lambda: geometry.quarter_disc(1.0, 0.1, 0.01, 0.3, half=1), "half"),
 ])
 def test_invalid_input(call, word):
     with pytest.raises(ValueError, match=word):

@@ -65,11 +65,14 @@ def _top(x0, load):
 
 
 def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty", theta=0,
-           friction="slip", obstacle="plane", gamma0=10.0, load=None, compiled=True):
+           friction="slip", obstacle="plane", gamma0=10.0, load=None, compiled=True,
+           friction_law="lagged", gamma0_t=None):
     """The model at the tested state, and its contact term (None without contact). ``load``: an
     extra item, "point" (a point load at a node of the right face), "body" (a body force), or
     "field" (the top edge's motion as a displacement field). ``compiled``: the return map in the
-    generated stress evaluation (True, the model's default) or in NumPy (False)."""
+    generated stress evaluation (True, the model's default) or in NumPy (False). ``friction_law``:
+    the threshold from the last increment's pressure ("lagged", the default) or from the current
+    one ("coulomb", whose derivative the Jacobian carries)."""
     x0 = 0.5 if kind == "axisymmetric" else 0.0
     material = (as_material(1000.0, 0.3, "j2", SATURATION) if law == "j2_saturation"
                 else as_material(1000.0, 0.3, law, HARDENING))
@@ -83,7 +86,7 @@ def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty",
         items.append(Fixed("bottom"))                 # sheared between its top and bottom edges
     else:
         c = Contact("bottom", _obstacle(obstacle, x0), method=method, theta=theta, gamma0=gamma0,
-                    mu=FRICTION[friction])
+                    mu=FRICTION[friction], friction=friction_law, gamma0_t=gamma0_t)
         items.append(c)
     m = Model(Body(meshes[x0], kind, material, update=update), items)
     m.finalize(compiled_return=compiled)
@@ -142,10 +145,15 @@ CASES = (
     # the same laws' NumPy return map (finalize(compiled_return=False))
     + [dict(kind=k, law=law, compiled=False) for k, law in
        (("plane_strain", "j2"), ("plane_strain", "chen"), ("axisymmetric", "j2"))]
-    # contact with plasticity: penalty and Nitsche (theta = 0) with each friction state, the other
-    # Nitsche variants slipping, and the circle
+    # contact with plasticity: penalty and Nitsche (theta = 0) with each friction state and both
+    # friction laws (lagged, the default, and coulomb), the other Nitsche variants slipping, and
+    # the circle (whose normal, and so the slip direction t_o, turns with x: its derivative)
     + [dict(law="j2", method=meth, theta=0, friction=f) for meth in ("penalty", "nitsche")
        for f in ("none", "slip", "stick")]
+    + [dict(law="j2", method=meth, theta=0, friction=f, friction_law="coulomb")
+       for meth in ("penalty", "nitsche") for f in ("slip", "stick")]
+    + [dict(method=meth, theta=0, friction="slip", obstacle="circle", friction_law="coulomb")
+       for meth in ("penalty", "nitsche")]
     + [dict(law="j2", method="nitsche", theta=th) for th in (1, -1)]
     + [dict(law="j2", method=meth, theta=th, obstacle="circle") for meth, th in
        (("penalty", 0), ("nitsche", -1))]

@@ -1,15 +1,25 @@
-"""The contact item: a tagged boundary against a rigid obstacle, penalty or Nitsche, lagged Coulomb.
+"""The contact item: a tagged boundary against a rigid obstacle, penalty or Nitsche, Coulomb friction.
 
 Its factor drives the obstacle's motion (obstacles.py); its terms come from the pure functions of
 laws.py with the obstacle's gap and normal at the current position x = X + u and, for Nitsche, the
-model's facet traction (docs/theory.md section 6). Friction uses the pressure of a lag state, the body
-at u_lag against the obstacle where it stood then: the converged state of the last increment
-(Shang and Chen's scheme), or with ``relag`` the state of the last pass within the increment, repeated
-until the pressure settles (true Coulomb). The lag state depends on converged data only, and its
-pressure is the pressure that state converged with, to round-off: Nitsche's stress at u_lag is
-evaluated from the converged state u_lag was solved from (a FacetBase), not from the one after it.
-The penalty friction keeps its stick part e_n as a boundary field (a lumped projection at each
-converged increment); Nitsche's lives in the stress.
+model's facet traction (docs/theory.md section 6).
+
+Friction (``mu > 0``) has two laws, chosen by ``friction``:
+
+* ``"lagged"`` (the default; Shang and Chen's scheme): the threshold is mu times the pressure of a lag state, the
+  body at u_lag against the obstacle where it stood then: the converged state of the last increment,
+  or with ``relag`` the state of the last pass within the increment, repeated until the pressure
+  settles. The lag state depends on converged data only, and its pressure is the pressure that state
+  converged with, to round-off: Nitsche's stress at u_lag is evaluated from the converged state u_lag
+  was solved from (a FacetBase), not from the one after it;
+* ``"coulomb"``: the slip threshold is mu times the pressure of the current iterate, solved in the
+  same Newton loop as everything else (the threshold's derivative is in the Jacobian, which is then
+  unsymmetric).
+
+The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = min(gamma0,
+10), docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
+tangential slip) as a boundary field (a lumped projection at each converged increment); Nitsche's
+lives in the stress.
 
 Results: the force from the residual (F . e = -R_c(u; e) for the constant fields e_x, e_y), here;
 the contact zone, its edges, the pressure profile at the quadrature points, the peak pressure, the
@@ -29,6 +39,7 @@ from petsc4py import PETSc
 from .. import compat
 from ..loads import Item
 from ..names import CONTACT_METHODS as METHODS
+from ..names import FRICTION_LAWS
 from . import laws
 from .obstacles import ContactError, Obstacle
 from .outputs import ContactOutputs
@@ -61,15 +72,25 @@ class Contact(Item):
     mu : float
         Coulomb friction coefficient (0: frictionless).
     relag : bool
-        True Coulomb: re-solve each increment with the threshold of its own solution until the
-        pressure changes by less than ``relag_tol`` (at most ``max_passes`` passes).
+        With the lagged law: re-solve each increment with the threshold of its own solution until
+        the pressure changes by less than ``relag_tol`` (at most ``max_passes`` passes).
+    friction : "lagged" or "coulomb"
+        The slip threshold mu p: "lagged" (the default) takes the pressure of the last converged
+        increment (Shang and Chen's scheme; with ``relag``, of the last pass), "coulomb" p of the
+        current iterate (in the same Newton loop). docs/theory.md section 6.3 says why lagged is
+        the default.
+    gamma0_t : float or None
+        Dimensionless weight of the tangential (friction) term, gamma_t = gamma0_t E / h; None:
+        min(gamma0, 10). Penalty: the stick part is elastic with stiffness gamma_t (a slip of q /
+        gamma_t while sticking); Nitsche: consistent for any gamma0_t (docs/theory.md section 6.3).
     """
 
     kind = "contact"
 
     def __init__(self, boundary: str, obstacle: Obstacle, method: str = "penalty",
                  gamma0: float = 100.0, theta: int = 0, mu: float = 0.0, relag: bool = False,
-                 max_passes: int = 10, relag_tol: float = 1e-4):
+                 max_passes: int = 10, relag_tol: float = 1e-4, friction: str = "lagged",
+                 gamma0_t: float | None = None):
         super().__init__(boundary)
         if method not in METHODS:
             raise ContactError(f"contact method {method!r} is unknown: choose penalty or nitsche")
@@ -81,8 +102,19 @@ class Contact(Item):
             raise ContactError(f"mu = {mu}: the friction coefficient must be a finite number >= 0")
         if not isinstance(obstacle, Obstacle):
             raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile")
+        if friction not in FRICTION_LAWS:
+            raise ContactError(f"friction = {friction!r} is unknown: choose coulomb (the current pressure) "
+                               "or lagged (the last increment's)")
+        if relag and friction != "lagged":
+            raise ContactError("relag = True re-solves the lagged law: give friction='lagged' or "
+                               "relag=False")
+        if gamma0_t is None:
+            gamma0_t = min(gamma0, 10.0)
+        if not (isinstance(gamma0_t, (int, float)) and np.isfinite(gamma0_t) and gamma0_t > 0):
+            raise ContactError(f"gamma0_t = {gamma0_t!r} must be a finite number > 0 (or None: min(gamma0, 10))")
         self.boundary, self.obstacle, self.method = boundary, obstacle, method
         self.gamma0, self.theta, self.mu = gamma0, theta, mu
+        self.friction, self.gamma0_t = friction, float(gamma0_t)
         self.relag, self.max_passes, self.relag_tol = relag, max_passes, relag_tol
         self.factor_n = 0.0
 
@@ -125,29 +157,35 @@ class Contact(Item):
         self.q_ref = None
         self._base = self._base_kept = None
         if self.mu > 0:
-            # the lag state: the body at u_lag against the obstacle where it stood then (d_lag)
-            x_lag, d_lag = ctx.x + self.u_lag, self._d_lag
-            g_lag, self._n_lag = obs.gap(x_lag, d_lag), obs.normal(x_lag, d_lag)
-            if self.method == "penalty":
-                p_lag = gamma * laws.positive_part(-g_lag)
-            else:
-                # the stress at u_lag from the state u_lag was solved from (captured at each commit)
-                self._base = ctx.facet_base()
-                PN_lag = ctx.facet_traction(N, self.u_lag, self._base)
-                p_lag = laws.positive_part(ufl.dot(self._n_lag, PN_lag) - gamma * g_lag)
-                self._base_kept = self._base.arrays()
+            self._gamma0tE = fem.Constant(msh, PETSc.ScalarType(self.gamma0_t * ctx.E))
+            gamma_t = self._gamma0tE / self.h
             self._mu_c = fem.Constant(msh, PETSc.ScalarType(self.mu))   # no recompile for a new mu
-            s = self._mu_c * p_lag
+            if self.friction == "lagged":
+                # the lag state: the body at u_lag against the obstacle where it stood then (d_lag)
+                x_lag, d_lag = ctx.x + self.u_lag, self._d_lag
+                g_lag, self._n_lag = obs.gap(x_lag, d_lag), obs.normal(x_lag, d_lag)
+                if self.method == "penalty":
+                    p_lag = gamma * laws.positive_part(-g_lag)
+                else:
+                    # the stress at u_lag from the state u_lag was solved from (captured at each commit)
+                    self._base = ctx.facet_base()
+                    PN_lag = ctx.facet_traction(N, self.u_lag, self._base)
+                    p_lag = laws.positive_part(ufl.dot(self._n_lag, PN_lag) - gamma * g_lag)
+                    self._base_kept = self._base.arrays()
+                self._p_lag = p_lag
+                s = self._mu_c * p_lag
+            else:
+                self._p_lag = None
+                s = self._mu_c * p                # the current pressure: differentiated with the rest
             slip = ufl.dot(t_o, (u - u_n) - (obs.d - self._d_n))
             if self.method == "penalty":
                 self.e_n = fem.Function(compat.function_space(msh, "Lagrange", ctx.degree), name="stick_slip")
-                Rt, self.q_ref, trial, self._e_new = laws.penalty_friction(slip, self.e_n, s, t_o, v, gamma)
+                Rt, self.q_ref, trial, self._e_new = laws.penalty_friction(slip, self.e_n, s, t_o, v, gamma_t)
             else:
                 q_u = ufl.dot(t_o, PN)
-                Rt, self.q_ref, trial = laws.nitsche_friction(slip, s, t_o, v, gamma, th, q_u,
+                Rt, self.q_ref, trial = laws.nitsche_friction(slip, s, t_o, v, gamma_t, th, q_u,
                                                               ufl.derivative(q_u, u, v))
             R = R + Rt
-            self._p_lag = p_lag
             self._slipping = ufl.gt(abs(trial), s)       # where the friction law slips
         self.R_c = R * ctx.weight * self.ds_c
         self._build_outputs(ctx)
@@ -194,8 +232,9 @@ class Contact(Item):
             self.e_n.x.array[:] = state["e_n"]
 
     def relag_pass(self) -> bool:
-        """True Coulomb: take the threshold from the current solution; True if it changed notably."""
-        if not (self.relag and self.mu > 0):
+        """The lagged law with ``relag``: take the threshold from the current solution; True if it
+        changed notably."""
+        if not (self.relag and self.mu > 0 and self.friction == "lagged"):
             return False
         p_old = self._assemble_vec(self._form("p_lag"))
         self.u_lag.x.array[:] = self.u.x.array
@@ -259,7 +298,7 @@ class Contact(Item):
     def lag_force(self) -> np.ndarray:
         """Force (x, y) of the lag state's pressure on the body, the normal force that the friction
         threshold mu p_lag is taken from: after a commit, the normal part of that increment's
-        :meth:`force` (zeros without friction)."""
+        :meth:`force` (zeros without friction and with the coulomb law, which has no lag state)."""
         out = np.zeros(2)
         if "lag_force" in self._ufl:
             for i in range(2):

@@ -7,10 +7,13 @@ contact traction = p n_o + q t_o, pressure p >= 0, t_o = (-n_o[1], n_o[0]).
 * Nitsche (theta = 1, 0, -1), with the nominal normal traction p(u) = n_o . (P N) of the current stress:
       R_n = -(theta/gamma) p(u) p'(u; v) + (1/gamma) [p(u) - gamma g]_+ (theta p'(u; v) - gamma n_o.v),
   which is the exact traction term -p n_o.v whenever p = [p - gamma g]_+.
-* Coulomb friction with a given slip threshold s (mu times a lagged pressure) and slip increment ds:
-      penalty:  q = -P_s(gamma (e_n + ds)), with e_n the elastic (stick) part carried over;
-      Nitsche:  q = P_s(q(u) - gamma ds), q(u) = t_o . (P N), and the theta-terms as for the normal part;
-  P_s(x) = x for |x| <= s, s sign(x) otherwise.
+* Coulomb friction with a slip threshold s and slip increment ds (a length along t_o), with the
+  tangential weight gamma_t (a stiffness per unit area, like gamma):
+      penalty:  q = -P_s(gamma_t (e_n + ds)), with e_n the elastic (stick) part carried over (a length);
+      Nitsche:  q = P_s(q(u) - gamma_t ds), q(u) = t_o . (P N), and the theta-terms as for the normal part;
+  P_s(x) = x for |x| <= s, s sign(x) otherwise. The threshold s = mu p is the caller's: mu times a
+  lagged pressure (no derivative) or mu times the pressure these functions return for the current
+  iterate (the Coulomb law: UFL differentiates it with the rest).
 Each function returns the residual integrand (linear in the test function v) with what the outputs
 need; none keeps state, so each can be differentiated and Taylor-tested alone.
 """
@@ -47,14 +50,16 @@ def nitsche_normal(g, n_o, v, gamma, theta, p_u, dp):
 
 
 def penalty_friction(slip, e_n, s, t_o, v, gamma):
-    """(residual integrand, tangential traction, trial value, new stick part) of penalty friction."""
+    """(residual integrand, tangential traction, trial value, new stick part) of penalty friction;
+    ``gamma`` the tangential weight gamma_t."""
     trial = gamma * (e_n + slip)
     q_tr = clip(trial, s)
     return q_tr * ufl.dot(t_o, v), -q_tr, trial, q_tr / gamma
 
 
 def nitsche_friction(slip, s, t_o, v, gamma, theta, q_u, dq):
-    """(residual integrand, tangential traction, trial value) of Nitsche's friction term."""
+    """(residual integrand, tangential traction, trial value) of Nitsche's friction term; ``gamma``
+    the tangential weight gamma_t."""
     trial = q_u - gamma * slip
     q = clip(trial, s)
     R = q / gamma * (theta * dq - gamma * ufl.dot(t_o, v))

@@ -277,8 +277,10 @@ class ContactOutputs:
             # reference length of the contact set that slips (friction at its threshold) and sticks
             slipping = ufl.conditional(item._slipping, 1.0, 0.0)
             self.ufl.update(slip=chi * slipping * dsc, stick=chi * (1.0 - slipping) * dsc,
-                            q=item.q_ref / stretch * phi1 * dsc, p_lag=item._p_lag * phi * dsc,
-                            lag_force=item._p_lag * ufl.dot(item._n_lag, self._e) * ctx.weight * dsc)
+                            q=item.q_ref / stretch * phi1 * dsc)
+            if item._p_lag is not None:        # the lagged law's threshold state (none for coulomb)
+                self.ufl.update(p_lag=item._p_lag * phi * dsc,
+                                lag_force=item._p_lag * ufl.dot(item._n_lag, self._e) * ctx.weight * dsc)
             if item.method == "penalty":
                 self.ufl["e"] = item._e_new * phi * dsc
         self.compiled = {}

@@ -186,8 +186,9 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
 
 def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float, order: int = 2,
                  growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
-                 cache_dir: str | os.PathLike = "meshes") -> MeshData:
-    """Hertz body: the part x >= 0, y <= R of the disc of radius R centred at (0, R), touching y = 0 at 0.
+                 cache_dir: str | os.PathLike = "meshes", half: bool = False) -> MeshData:
+    """Hertz body: the part x >= 0, y <= R of the disc of radius R centred at (0, R), touching y = 0 at 0
+    (with ``half``, the whole lower half y <= R).
 
     Parameters
     ----------
@@ -200,25 +201,40 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
         Radius of the refined zone around the origin.
     order, comm, cache_dir
         As for `rectangle`; with order 2 the mid-side nodes of the arc lie on the true circle.
+    half
+        The half disc -R <= x <= R, y <= R (a cylinder that slides: no symmetry about x = 0).
 
     Returns
     -------
     MeshData
-        Facet tags top (the flat edge y = R, loaded) = 1, xsym (x = 0) = 2, contact (the arc) = 3.
+        Facet tags top (the flat edge y = R, loaded) = 1, xsym (x = 0) = 2, contact (the arc) = 3;
+        the half disc has top = 1 and contact = 3 (two arcs, from x = R and from x = -R to the origin).
     """
     _positive(R=R, size=size, size_contact=size_contact, contact_zone=contact_zone, growth=growth)
     order = _check_order(order)
     if size_contact > size:
         raise ValueError(f"size_contact must not exceed size = {size}, got {size_contact!r}")
+    if not isinstance(half, bool):
+        raise ValueError(f"half must be True or False, got {half!r}")
     params = dict(R=float(R), size=float(size), size_contact=float(size_contact),
                   contact_zone=float(contact_zone), order=order, growth=float(growth))
+    if half:                    # only then, so that the quarter's cache names stay as they were
+        params["half"] = True
 
     def construct() -> None:
         geo = gmsh.model.geo
         origin, centre, corner = (geo.addPoint(x, y, 0.0, size) for x, y in [(0, 0), (0, R), (R, R)])
-        xsym, top = geo.addLine(origin, centre), geo.addLine(centre, corner)
+        top = geo.addLine(centre, corner)
         contact = geo.addCircleArc(corner, centre, origin)
-        surface = geo.addPlaneSurface([geo.addCurveLoop([xsym, top, contact])])
+        if half:
+            left = geo.addPoint(-R, R, 0.0, size)
+            top_left, contact_left = geo.addLine(left, centre), geo.addCircleArc(origin, centre, left)
+            loop = [top_left, top, contact, contact_left]
+            tops, contacts, xsym = [top_left, top], [contact, contact_left], None
+        else:
+            xsym = geo.addLine(origin, centre)
+            loop, tops, contacts = [xsym, top, contact], [top], [contact]
+        surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
         geo.synchronize()
         fields = gmsh.model.mesh.field
         distance = fields.add("Distance")
@@ -233,8 +249,10 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
         for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
             gmsh.option.setNumber(f"Mesh.{option}", 0)
         _add_group(2, [surface], BODY_TAG, "body")
-        for tag, (name, curve) in enumerate([("top", top), ("xsym", xsym), ("contact", contact)], start=1):
-            _add_group(1, [curve], tag, name)
+        for tag, (name, curves) in enumerate([("top", tops), ("xsym", [xsym]), ("contact", contacts)],
+                                             start=1):
+            if curves != [None]:
+                _add_group(1, curves, tag, name)
 
     return _build("quarter_disc", params, construct, comm, cache_dir)
 

@@ -16,7 +16,7 @@ from typing import ClassVar
 
 from ..mechanics.material_data import Elastic
 from ..names import CONTACT_METHODS as METHODS
-from ..names import PREDICTORS, UPDATES, first_increment_error
+from ..names import FRICTION_LAWS, PREDICTORS, UPDATES, first_increment_error
 
 # dolfinx, gmsh and the rest are imported by the methods that build: checking parameters stays light
 
@@ -192,7 +192,9 @@ class ContactScene(Scene):
         "contact": f"contact method: {', '.join(METHODS)} or off",
         "gamma0": "contact stiffness gamma0: gamma = gamma0 E / h (penalty and Nitsche)",
         "theta": "Nitsche variant: 1 symmetric, 0, -1 skew-symmetric",
-        "relag": "true Coulomb: re-solve each increment until the lagged pressure settles"}
+        "relag": "with friction = lagged: re-solve each increment until the lagged pressure settles",
+        "friction": "friction law: lagged (the paper's scheme, tangential weight gamma0) or coulomb "
+                    "(current pressure, tangential weight min(gamma0, 10))"}
 
     gap: float = 1.0
     mu: float = 0.1
@@ -200,6 +202,7 @@ class ContactScene(Scene):
     gamma0: float = 100.0
     theta: int = 0
     relag: bool = False
+    friction: str = "lagged"
 
     def validate(self):
         super().validate()
@@ -213,11 +216,24 @@ class ContactScene(Scene):
             raise SceneError(f"theta = {self.theta}: use 1, 0 or -1")
         if not self.gap >= 0:
             raise SceneError(f"gap = {self.gap}: the obstacle must not start inside the body (gap >= 0)")
+        if self.friction not in FRICTION_LAWS:
+            raise SceneError(f"friction = {self.friction!r}: choose {' or '.join(FRICTION_LAWS)}")
+        if self.relag and self.friction != "lagged":
+            raise SceneError("relag = true re-solves the lagged law: set friction = lagged")
+
+    def newton_settings(self):
+        """The paper's friction scheme keeps the line search on ||R|| that its stored histories
+        were computed with (tests/reference); the solver's default with friction is the energy's."""
+        from ..solver import NewtonSettings
+        paper = self.contact != "off" and self.friction == "lagged"
+        return NewtonSettings(line_search="residual" if paper else None)
 
     def contact_item(self, boundary: str, obstacle):
         """The contact item of the scene's parameters (None when contact = off)."""
         from ..contact import Contact
         if self.contact == "off":
             return None
+        lagged = self.friction == "lagged"        # the paper's scheme, as the paper weighs it
         return Contact(boundary, obstacle, method=self.contact, gamma0=self.gamma0, theta=self.theta,
-                       mu=self.mu, relag=self.relag)
+                       mu=self.mu, relag=self.relag, friction=self.friction,
+                       gamma0_t=self.gamma0 if lagged else None)

@@ -99,9 +99,9 @@ class NewtonSettings:
     divergence: float = 1e12
     backtracks: int = 4
     free_its: int = 5              # corrections taken in full (unless inadmissible) before the Armijo test
-    line_search: bool | str | None = None   # None: on when the model has contact (boundary) terms;
-                                            # True/"residual": Armijo on ||R||; "energy": du.R(u + a du);
-                                            # False/"none": off
+    line_search: bool | str | None = None   # None: with contact "residual", with friction (a contact
+                                            # with mu > 0) "energy", else off; True/"residual": Armijo
+                                            # on ||R||; "energy": du.R(u + a du); False/"none": off
     energy_eta: float = 0.8        # energy search: accept a step once |du.R| <= eta |du.R(u)|
     scale: str = "initial"         # what rtol is relative to: "initial", the largest initial
                                    # residual of the run; "force", ||F_int|| of the iterate
@@ -126,8 +126,9 @@ class Newton(LineSearches):
         if not linear.is_direct(self.ksp):       # algebraic multigrid needs the rigid-body modes
             self.A.setNearNullSpace(linear.rigid_body_modes(model.V, self.A))
         ls = self.settings.line_search
-        if ls is None:
-            ls = any(item.kind == "contact" for item in model.items)
+        if ls is None:       # friction: the energy search stops in the stick band (theory.md 7.1)
+            contacts = [item for item in model.items if item.kind == "contact"]
+            ls = ("energy" if any(getattr(c, "mu", 0.0) > 0 for c in contacts) else True) if contacts else False
         self.line_search = {True: "residual", False: None, "none": None}.get(ls, ls)
         if self.line_search not in (None, "residual", "energy"):
             raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")

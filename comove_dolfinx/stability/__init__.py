@@ -2,6 +2,7 @@
 
     python -m comove_dolfinx.stability elastica --out results/stability   # one scene
     python -m comove_dolfinx.stability shear --out results/stability      # Jaumann simple shear
+    python -m comove_dolfinx.stability friction --out results/stability   # frictional Hertz slide
     python -m comove_dolfinx.stability all --out results/stability        # everything, 2 at a time
 
 For each scene the grid runs the scene with one parameter changed per row (stress update, contact
@@ -34,8 +35,14 @@ points with their numbers, rebuilt from every CSV in the folder). Each run's his
 run.json go to out/runs/<scene>/<tag>/. CPU seconds are this process's, run by run (compilation
 included when a run meets a new kind of model). docs/stability.md explains the cases.
 
+The friction case (friction.py) presses a half-cylinder onto a rigid flat and slides the flat, for
+each contact method and friction law (rows) against gamma0 and the number of sliding increments
+(columns); its cells give the Newton iterations and Q / (mu P) at the end, and
+``friction_detail.csv`` the iterations per pressing and per sliding increment.
+
 Modules: causes.py (the causes, the classifier and the Recorder), grid.py (the scenes' grids and
-one run), shear.py (the simple-shear case), report.py (CSV, heat maps, summary).
+one run), shear.py (the simple-shear case), friction.py (the frictional slide), report.py (CSV, heat
+maps, summary).
 """
 from __future__ import annotations
 
@@ -48,6 +55,7 @@ import time
 
 from .causes import (CAUSES, CHATTER, DIVERGED, INVERTED, LINEAR, NAN, NO_CONVERGENCE, OTHER,
                      RETURN_MAP, SHORT, SR_RANGE, Recorder, classify, is_cycling)
+from .friction import friction_panels, hertz_slide, run_friction
 from .grid import Panel, panels, panels_of, run_case, run_scene_grid
 from .report import heatmap, read_csv, replot, summary, write_csv
 from .shear import (first_decrease, green_naghdi_shear, jaumann_shear, run_shear, shear_panels,
@@ -55,11 +63,11 @@ from .shear import (first_decrease, green_naghdi_shear, jaumann_shear, run_shear
 
 __all__ = ["CAUSES", "CHATTER", "DIVERGED", "INVERTED", "LINEAR", "NAN", "NO_CONVERGENCE", "OTHER",
            "RETURN_MAP", "SHORT", "SR_RANGE", "Panel", "Recorder", "classify", "first_decrease",
-           "green_naghdi_shear", "heatmap", "is_cycling", "jaumann_shear", "main", "panels", "panels_of",
-           "read_csv", "replot", "run_case", "run_scene_grid", "run_shear", "shear_panels",
+           "friction_panels", "green_naghdi_shear", "hertz_slide", "heatmap", "is_cycling", "jaumann_shear", "main", "panels", "panels_of",
+           "read_csv", "replot", "run_case", "run_friction", "run_scene_grid", "run_shear", "shear_panels",
            "simple_shear", "summary", "write_csv"]
 
-SCENES = ["elastica", "beam", "plate", "ring", "shear"]
+SCENES = ["elastica", "beam", "plate", "ring", "shear", "friction"]
 
 
 def main(argv=None) -> int:
@@ -96,6 +104,8 @@ def main(argv=None) -> int:
     logging.disable(logging.INFO)
     if args.scene == "shear":
         run_shear(out)
+    elif args.scene == "friction":
+        run_friction(out)
     else:
         run_scene_grid(args.scene, out)
     summary(out, panels_of)

@@ -55,7 +55,10 @@ def panels(scene: str) -> list[Panel]:
 
 
 def panels_of(scene: str) -> list[Panel]:
-    """The panels of a scene or of the shear case."""
+    """The panels of a scene, of the shear case or of the friction case."""
+    if scene == "friction":
+        from .friction import friction_panels
+        return friction_panels()
     return shear_panels() if scene == "shear" else panels(scene)
 
 

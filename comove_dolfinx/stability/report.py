@@ -23,9 +23,9 @@ FIELDS = ["scene", "panel", "method", "column", "sets", "n_steps", "gamma0", "ma
           "cutbacks", "load_reached", "load_max", "cause", "newton_its", "failed_its", "increments",
           "cpu_s", "wall_s", "result", "max_penetration", "penetration_per_h", "chatter_solves",
           "set_changes_last_fail", "peak_gamma",
-          "max_omega2", "message"]
-RESULT_LABEL = {"elastica": "tip v", "beam": "tip v", "plate": "w0", "ring": "P"}
-SCENES = ("elastica", "beam", "plate", "ring", "shear")
+          "max_omega2", "message", "press_its", "slide_its"]
+RESULT_LABEL = {"elastica": "tip v", "beam": "tip v", "plate": "w0", "ring": "P", "friction": "Q/μP"}
+SCENES = ("elastica", "beam", "plate", "ring", "shear", "friction")
 
 
 def write_csv(path: pathlib.Path, rows: list[dict]) -> None:
@@ -60,6 +60,9 @@ def _cell_text(r: dict) -> str:
         return f"{SHORT.get(cause, cause)}\nat {float(r['load_reached']):.3g}/{float(r['load_max']):.3g}"
     its = int(float(r["newton_its"] or 0))
     text = (f"ok, {its} its" if r["status"] == "converged" else f"{cut} cut, {its} its")
+    press, slide = _f(r.get("press_its")), _f(r.get("slide_its"))
+    if math.isfinite(press):                      # the friction case: per increment, by phase
+        text += f"\npress {press:.1f}, slide {slide:.1f}"
     pen = _f(r.get("penetration_per_h"))
     if math.isfinite(pen):
         text += f"\npen {pen:.2g} h"
@@ -173,6 +176,9 @@ def _specific(scene: str, rows: list[dict]) -> list[str]:
         if devs:
             out += ["Chen's law against J2 (same update, same increments; P = force at the end of the "
                     "crush):", ""] + [f"- {d}" for d in devs] + [""]
+    if scene == "friction":
+        out += ["Newton iterations per pressing and per sliding increment of every run, and Q / (mu P) at "
+                "the end, are in `friction_detail.csv`.", ""]
     if scene == "shear":
         out += ["Peak of the shear stress (where it first falls) and the distance from the closed form "
                 "up to gamma = 3 are in `shear_detail.csv`; the curves at dgamma = 0.1 in "
