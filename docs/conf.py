@@ -1,0 +1,108 @@
+"""Sphinx configuration of the documentation site (``make docs`` builds it into docs/_build/html).
+
+The Markdown pages of docs/ are read by MyST; the API reference comes from the docstrings (autodoc,
+numpy style through napoleon); each demo (demos/demo_*.py, jupytext's percent format) is run once
+into docs/_build/demos/ and becomes a page with the pictures of that run (the demos take 5 to 20 s
+each; a demo whose script has not changed since its last successful run is not run again).
+"""
+import os
+import pathlib
+import sys
+
+DOCS = pathlib.Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT))
+
+project = "comove_dolfinx"
+author = "the comove_dolfinx authors"
+copyright = "the comove_dolfinx authors"
+
+extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
+              "sphinx.ext.viewcode"]
+source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+root_doc = "index"
+exclude_patterns = ["_build", "**/*.csv"]
+
+myst_enable_extensions = ["dollarmath", "colon_fence"]
+myst_heading_anchors = 3
+
+napoleon_numpy_docstring = True
+napoleon_google_docstring = False
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_default_options = {"members": True, "ignore-module-all": True, "show-inheritance": True}
+
+html_theme = "furo"
+html_title = "comove_dolfinx"
+html_static_path = []
+
+
+def _run_demo(script: pathlib.Path, out: pathlib.Path) -> None:
+    """Runs the demo into ``out`` unless ``out`` already holds a run of this script (its exit status
+    0 recorded after the script's last change); a demo that fails its own check fails the build."""
+    import subprocess
+
+    from sphinx.util import logging
+
+    stamp = out / ".ran"
+    if stamp.is_file() and stamp.stat().st_mtime >= script.stat().st_mtime:
+        return
+    logging.getLogger(__name__).info(f"running {script.name} into {out.relative_to(ROOT)}")
+    out.mkdir(parents=True, exist_ok=True)
+    p = subprocess.run([sys.executable, str(script), "--out", str(out)], cwd=ROOT, capture_output=True,
+                       text=True)
+    (out / "output.txt").write_text(p.stdout + p.stderr)
+    if p.returncode != 0:
+        raise RuntimeError(f"{script.name} failed (exit {p.returncode}); its output is in "
+                           f"{(out / 'output.txt').relative_to(ROOT)}")
+    stamp.touch()
+
+
+def _demo_page(script: pathlib.Path, out: pathlib.Path) -> str:
+    """The demo ``script`` (percent format) as a MyST page: its Markdown cells as text, its code
+    cells as Python blocks, then the pictures its run left in ``out``."""
+    import jupytext
+
+    parts = []
+    for cell in jupytext.read(script).cells:
+        text = cell.source.strip("\n")
+        if text.strip():
+            parts.append(text if cell.cell_type == "markdown" else f"```python\n{text}\n```")
+    pictures = sorted(out.glob("*.png"))
+    if not pictures:
+        raise RuntimeError(f"{script.name} drew no picture into {out.relative_to(ROOT)}")
+    parts.append("## What it draws\n\nThe pictures of the run at the demo's defaults, made when "
+                 "this page was built.")
+    parts += [f"![{p.stem}]({os.path.relpath(p, DOCS / 'demos')})" for p in pictures]
+    return "\n\n".join(parts) + "\n"
+
+
+def write_demo_pages(app):
+    """Runs each demo (demos/demo_*.py) into docs/_build/demos/NAME and writes its page,
+    docs/demos/NAME.md (generated, not kept in git), and the demos' index."""
+    pages = DOCS / "demos"
+    pages.mkdir(exist_ok=True)
+    scripts = sorted((ROOT / "demos").glob("demo_*.py"))
+    for script in scripts:
+        out = DOCS / "_build" / "demos" / script.stem
+        _run_demo(script, out)
+        _write_if_changed(pages / f"{script.stem}.md", _demo_page(script, out))
+    index = ["# Demos", "",
+             "Each demo is a literate script in jupytext's percent format (it opens as a notebook "
+             "too): it states the physics, builds its problem with the public API, runs it, draws it "
+             "and checks its own result. Run one with `python demos/demo_NAME.py --out DIR`, also "
+             "under `mpirun -n 2`. Each page is the script with the pictures of its run at its "
+             "defaults, made when the site was built (`make docs` runs the demos once; deleting "
+             "docs/_build runs them again).", "",
+             "```{toctree}", ":maxdepth: 1", "", *[s.stem for s in scripts], "```", ""]
+    _write_if_changed(pages / "index.md", "\n".join(index))
+
+
+def _write_if_changed(path: pathlib.Path, text: str) -> None:
+    """Writes ``text`` unless the file holds it already (Sphinx rebuilds only changed pages)."""
+    if not path.is_file() or path.read_text() != text:
+        path.write_text(text)
+
+
+def setup(app):
+    app.connect("builder-inited", write_demo_pages)
