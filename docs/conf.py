@@ -51,10 +51,11 @@ def _run_demo(script: pathlib.Path, out: pathlib.Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     p = subprocess.run([sys.executable, str(script), "--out", str(out)], cwd=ROOT, capture_output=True,
                        text=True)
-    (out / "output.txt").write_text(p.stdout + p.stderr)
+    (out / "stdout.txt").write_text(p.stdout.replace(f"{ROOT}{os.sep}", ""))
+    (out / "stderr.txt").write_text(p.stderr)
     if p.returncode != 0:
         raise RuntimeError(f"{script.name} failed (exit {p.returncode}); its output is in "
-                           f"{(out / 'output.txt').relative_to(ROOT)}")
+                           f"{out.relative_to(ROOT)}/stdout.txt and stderr.txt")
     stamp.touch()
 
 
@@ -71,8 +72,9 @@ def _demo_page(script: pathlib.Path, out: pathlib.Path) -> str:
     pictures = sorted(out.glob("*.png"))
     if not pictures:
         raise RuntimeError(f"{script.name} drew no picture into {out.relative_to(ROOT)}")
-    parts.append("## What it draws\n\nThe pictures of the run at the demo's defaults, made when "
-                 "this page was built.")
+    printed = (out / "stdout.txt").read_text().strip()
+    parts.append("## What it prints and draws\n\nThe run at the demo's defaults, made when this page "
+                 f"was built:\n\n```text\n{printed}\n```")
     parts += [f"![{p.stem}]({os.path.relpath(p, DOCS / 'demos')})" for p in pictures]
     return "\n\n".join(parts) + "\n"
 
