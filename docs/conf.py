@@ -1,7 +1,7 @@
 """Sphinx configuration of the documentation site (``make docs`` builds it into docs/_build/html).
 
 The Markdown pages of docs/ are read by MyST; the API reference comes from the docstrings (autodoc,
-numpy style through napoleon); each demo (demos/demo_*.py, jupytext's percent format) is run once
+numpy style through napoleon; docs/reference/ is generated, one page per package); each demo (demos/demo_*.py, jupytext's percent format) is run once
 into docs/_build/demos/ and becomes a page with the pictures of that run (the demos take 5 to 20 s
 each; a demo whose script has not changed since its last successful run is not run again).
 """
@@ -106,5 +106,50 @@ def _write_if_changed(path: pathlib.Path, text: str) -> None:
         path.write_text(text)
 
 
+def _first_line(path: pathlib.Path) -> str:
+    """The first line of a module's docstring (its summary), read without importing it."""
+    import ast
+
+    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
+    return doc.strip().split("\n")[0].rstrip(".") if doc.strip() else ""
+
+
+def write_reference_pages(app):
+    """docs/reference/: one page per package of comove_dolfinx (the package and each of its
+    modules, from their docstrings), generated at every build so that a new module has its page;
+    not kept in git."""
+    package = ROOT / "comove_dolfinx"
+    out = DOCS / "reference"
+    out.mkdir(exist_ok=True)
+    packages = [package] + sorted(d for d in package.iterdir() if (d / "__init__.py").is_file())
+    pages = []
+    for pkg in packages:
+        name = ".".join(pkg.relative_to(ROOT).parts)
+        modules = [name] + [f"{name}.{f.stem}" for f in sorted(pkg.glob("*.py"))
+                            if not f.name.startswith("__")]
+        lines = [f"# `{name}`", "", _first_line(pkg / "__init__.py") + ".", ""]
+        for module in modules:
+            if module != name:
+                lines += [f"## `{module}`", ""]
+            lines += ["```{eval-rst}", f".. automodule:: {module}", "```", ""]
+        page = "index" if pkg == package else pkg.name
+        pages.append(page)
+        if page != "index":
+            _write_if_changed(out / f"{page}.md", "\n".join(lines))
+        else:
+            top = lines
+    index = ["# API reference", "",
+             "Every module of the package, from its docstrings: the package itself below, each of its "
+             "packages on a page of its own. `import comove_dolfinx as cm` gives the public names "
+             "(`comove_dolfinx`'s list below); [The public API, by example](../api.md) shows them in "
+             "use.", "",
+             "```{toctree}", ":maxdepth: 1", "", *pages[1:], "```", "", *top[4:]]
+    _write_if_changed(out / "index.md", "\n".join(index))
+    for old in out.glob("*.md"):                   # the page of a package that is gone
+        if old.stem not in pages:
+            old.unlink()
+
+
 def setup(app):
     app.connect("builder-inited", write_demo_pages)
+    app.connect("builder-inited", write_reference_pages)
