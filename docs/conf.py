@@ -25,6 +25,7 @@ exclude_patterns = ["_build", "**/*.csv"]
 
 myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3
+smartquotes = False                # options (--out) and quotes stay as typed
 
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
