@@ -2,6 +2,7 @@
 #   make demo   install what is missing, then run the main job (the beam scene)
 #   make test   install what is missing, then run the test suite (serial and 2 MPI ranks)
 #   make study  speed against accuracy across methods (results/study/); make stability, make cost
+#   make docs   the documentation site (docs/_build/html; Debian 12 with its packages)
 #
 # Where dolfinx comes from (DOLFINX=auto|apt|pip; README, Platforms):
 #   apt   Debian's packages: Debian 12 has dolfinx 0.5.2, Debian 13 has 0.9. They serve
@@ -60,7 +61,7 @@ MPIRUN  := mpirun -n $(NP)
 endif
 STAMP   := $(VENV)/.installed-$(SOURCE)
 
-.PHONY: all system venv demo test test-serial test-mpi study stability cost clean
+.PHONY: all system venv demo test test-serial test-mpi study stability cost docs docs-site clean
 
 all: demo
 
@@ -124,5 +125,31 @@ cost: venv
 	$(MPIRUN) $(PY) -m comove_dolfinx.cost scale --out results/cost
 	$(PY) -m comove_dolfinx.cost slopes --out results/cost
 
+# The documentation site: Sphinx with MyST (the Markdown pages of docs/), autodoc and napoleon (the API
+# reference from the numpy-style docstrings), and each demo run once and shown as a page with its
+# pictures (jupytext reads the percent scripts; docs/conf.py). Warnings are errors. Built with Debian
+# 12's Sphinx 5.3, MyST 0.18 and furo, and jupytext from PyPI into the venv (its other dependencies are
+# Debian's); elsewhere it is skipped.
+DOCS_APT_PKGS := python3-sphinx python3-myst-parser furo python3-nbformat
+DOCS_PIP_PKGS := "jupytext==1.19.*"
+
+docs:
+	@if [ "$(OS_ID)" = debian12 ] && [ "$(SOURCE)" = apt ]; then $(MAKE) --no-print-directory docs-site; \
+	else echo "make docs: the site is built on Debian 12 with Debian's dolfinx (DOLFINX=apt); skipped on \
+	$(OS_ID) with DOLFINX=$(SOURCE)"; fi
+
+docs-site: venv
+	@missing=""; for p in $(DOCS_APT_PKGS); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:$$missing"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+	@$(PY) -c "import jupytext" 2>/dev/null || $(PY) -m pip install -q $(DOCS_PIP_PKGS)
+	$(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
+
 clean:
-	rm -rf $(VENV) results .pytest_cache
+	rm -rf $(VENV) results .pytest_cache docs/_build docs/demos

@@ -232,7 +232,7 @@ def _set_bc(b: PETSc.Vec, bcs, x: PETSc.Vec, alpha: float) -> None:
 
 
 def constraint_gap(work: PETSc.Vec, bcs, x: PETSc.Vec) -> float:
-    """max |g - x| over the Dirichlet dofs of ``bcs`` on every rank (collective); ``work``, a vector
+    """``max |g - x|`` over the Dirichlet dofs of ``bcs`` on every rank (collective); ``work``, a vector
     of x's layout, is overwritten."""
     with work.localForm() as loc:
         loc.set(0.0)

@@ -15,13 +15,13 @@ MUMPS factorisation and solve (symbolic analysis done once, as in Newton), sampl
 increment of the run (its time taken out of the run's); the ratio is the median over the runs of
 the run's time per iteration over the mean of its floor samples. Also the run's residual evaluations per iteration
 and its Timer split; a cProfile listing of the largest size.
-solvers: per ring size and solver configuration (PETSc options under comove_), the CPU time of one
+solvers: per ring size and solver configuration (PETSc options under ``comove_``), the CPU time of one
 factorisation and solve of the real tangent, and of the short run.
 scale: per scene, size and number of ranks (run once serial, once under mpirun, rows appended),
 wall and CPU time (summed over ranks) per Newton iteration of a short run, MUMPS against GAMG.
 slopes: why the line search spends trials. In the ring's run (``--sizes``, default 0.058, about 18k
 dofs), at the first four corrections past the load factor 0.2 (delta = 1.32) whose full step
-overshoots (s(1) > 0.5 |s(0)|, s(a) = du . R(u + a du)), the secant slope (s(a) - s(0)) / (a |s(0)|)
+overshoots (``s(1) > 0.5 |s(0)|``, ``s(a) = du . R(u + a du)``), the secant slope ``(s(a) - s(0)) / (a |s(0)|)``
 at steps a from 1e-5 to 1, and its internal force's part: 1 as a -> 0 for an exact tangent, and it
 stays near 1 where the residual is smooth along du; with the quadrature points that yield at the
 iterate and unload at the step, and those that start to yield there. The run goes on as without
@@ -449,8 +449,8 @@ def _plastic_points(model) -> np.ndarray | None:
 
 class SlopeProbe:
     """A Newton monitor that looks along the corrections which overshoot: after load ``after``, at
-    the first ``count`` corrections with s(0) < 0 and s(1) > ``overshoot`` |s(0)| (s(a) = du . R(u +
-    a du)), the secant slopes (s(a) - s(0)) / (a |s(0)|) at ``steps``, whole and the internal
+    the first ``count`` corrections with s(0) < 0 and ``s(1) > overshoot |s(0)|`` (``s(a) = du . R(u +
+    a du)``), the secant slopes ``(s(a) - s(0)) / (a |s(0)|)`` at ``steps``, whole and the internal
     force's part (Newton.along), and for a plastic body the quadrature points that yield at the
     iterate and unload at the step, and those that start to yield. ``cases``: one dict per
     correction (load, iteration, s0, the points yielding at the iterate, and rows of (a, slope,

@@ -1,5 +1,7 @@
 """Steps and jobs: load a body in steps, record probes, hand every converged increment to writers.
 
+::
+
     job = cm.Job(body, items, steps=[cm.Step(20), cm.Step(10, ramp={press: 0.0})],
                  probes=[cm.NodeDisplacement("tip", (10, 0))], writers=[cm.HistoryCSV("h.csv")])
     results = job.run()

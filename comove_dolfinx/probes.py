@@ -4,6 +4,8 @@ A probe names its ``columns``, is attached once to the compiled model (``attach(
 a dict of those columns for the converged state (``__call__(model)``); every rank calls it and gets
 the same values. A job's history is the increment's step and load columns followed by every probe's.
 
+::
+
     cm.NodeDisplacement("tip", (10.0, 0.0))           # tip_ux, tip_uy at the node at (10, 0)
     cm.NodeDisplacement("centre", (0.0, 0.0), component=1, column="center_uz")
     cm.ContactForce(contact, "force", component=1, scale=-2.0)   # symmetry: twice the quarter's
@@ -76,7 +78,7 @@ class NodeDisplacement(Probe):
 
 class ContactForce(Probe):
     """Force of a contact item's obstacle on the body: ``component`` 0 or 1 times ``scale`` (one
-    column ``name``), or both components (``name``_fx, ``name``_fy)."""
+    column ``name``), or both components (``<name>_fx``, ``<name>_fy``)."""
 
     def __init__(self, contact, name: str = "contact_force", component: int | None = 1, scale: float = 1.0):
         self.contact, self.component, self.scale = contact, component, scale

@@ -1,5 +1,7 @@
 """Problem files: a job described in TOML, for ``comove run problem.toml`` (docs/api.md).
 
+::
+
     [mesh]                       # a built-in builder with its parameters, or file = "part.msh"
     builder = "annulus_sector"
     r_in = 4.849

@@ -1,5 +1,7 @@
-"""The cost benchmark's bookkeeping (comove_dolfinx.cost, docs/performance.md): a one-increment
-floor study of the ring writes its table and chart, and its figures are consistent with each other."""
+"""The cost benchmark (comove_dolfinx.cost, docs/performance.md): the elastic floor solves the system
+it assembles, a one-increment floor study of the ring writes its table and chart with its parts
+inside the run, scene parameters reach the runs, the line-search probe and the parts study leave the
+run as it was."""
 import numpy as np
 import pytest
 
@@ -7,23 +9,34 @@ from comove_dolfinx import cost
 from comove_dolfinx.tables import read_table
 
 
-def test_floor_study_writes_a_consistent_table(tmp_path):
+def test_the_floor_solves_the_elastic_system_it_assembles():
+    """The floor's iteration is a real linear-elastic solve on the run's mesh, space and supports:
+    its right-hand side is the stiffness times a random field w (with Newton's lifting of the
+    supported rows), so the factorisation and solve must give w back, to round-off, and the
+    stiffness is regular on the supported ring (no rigid-body mode left). A matrix and residual of
+    different forms, a wrong lifting or a solve that did not happen would not."""
+    run = cost.short_run("ring", 0.22, 1)
+    floor = cost.ElasticFloor(run["model"])
+    for _ in range(2):                             # a new field each time, the analysis reused
+        times = floor.sample()
+        w, x = floor.w.x.array, floor.x.array
+        assert np.linalg.norm(x - w) < 1e-9 * np.linalg.norm(w)
+        assert all(t >= 0.0 for t in times)
+    floor.destroy()
+
+
+def test_floor_study_writes_its_table_with_the_parts_inside_the_run(tmp_path):
+    """The Timer's parts are measured by their own clock calls inside the run, the run's CPU around
+    it: they must fit in it. Every Newton iteration evaluates the residual at least once."""
     rows = cost.floor(tmp_path, sizes=(0.22,), repeats=1, increments=1)
     (row,) = read_table(tmp_path / "floor.csv")
     assert (tmp_path / "floor.png").stat().st_size > 0
     assert int(row["dofs"]) == rows[0]["dofs"] > 1000 and int(row["iterations"]) >= 1
-    # the floor is its three parts, and the ratio (one run) is the iteration over the floor
-    parts = sum(float(row[k]) for k in ("floor_matrix_s", "floor_vector_s", "floor_solve_s"))
-    assert float(row["floor_cpu_s"]) == pytest.approx(parts, rel=1e-9)
-    assert float(row["ratio"]) == pytest.approx(float(row["iteration_cpu_s"]) / parts, rel=1e-9)
-    # every iteration evaluates the residual at least once, and the Timer's parts fit in the run
     assert float(row["residuals_per_it"]) >= 1.0
-    timed = sum(float(row[f"{k}_s_per_it"]) for k in ("solve", "jacobian", "assembly", "stress_update"))
-    assert 0.0 < timed <= float(row["iteration_cpu_s"]) * 1.05 and np.isfinite(float(row["ratio"]))
-    # with one run, its timed parts and the rest outside them make up its time per iteration
-    parts = timed + sum(float(row[f"{k}_s_per_it"]) for k in ("force_scale", "predictor"))
-    assert float(row["other_s_per_it"]) >= 0.0
-    assert parts + float(row["other_s_per_it"]) == pytest.approx(float(row["iteration_cpu_s"]), rel=1e-9)
+    timed = sum(float(row[f"{k}_s_per_it"]) for k in ("solve", "jacobian", "assembly", "stress_update",
+                                                       "force_scale", "predictor"))
+    assert 0.0 < timed <= float(row["iteration_cpu_s"]) * 1.05
+    assert float(row["floor_cpu_s"]) > 0.0 and np.isfinite(float(row["ratio"]))
 
 
 def test_scene_parameters_reach_the_runs_and_bad_ones_are_refused(capsys):

@@ -1,6 +1,6 @@
 """The study's arithmetic (Richardson, Pareto front, the claim table, q read off a history) on sequences
-with known answers; material constants that do not enter the generated code; the timing of the whole
-process."""
+with known answers; material constants that do not enter the generated code; the timing's clocks
+nested in the process's."""
 import math
 
 import numpy as np
@@ -93,14 +93,16 @@ def test_material_constants_do_not_enter_the_compiled_code(tmp_path):
     assert r1["tip_uy"][-1] < 0 and ratio == pytest.approx(2.0, rel=1e-4)
 
 
-def test_timing_accounts_for_the_whole_process(tmp_path):
-    """The parts of the timing add up to the run and what came before it, within the process's life."""
+def test_timing_fits_in_the_process(tmp_path):
+    """Three clocks nest: the parts the run times (each span its own clock calls) fit in the run's
+    wall time, and what came before the run plus the run fit in the process's life as the kernel
+    counts it (/proc)."""
     _, res = _block(1000.0, 0.0, tmp_path)
     parts = res.timing
     before = parts["before the run (start-up, imports, mesh)"]
     assert 0.0 < before < res.process["wall_s"]
-    run_parts = sum(v for k, v in parts.items() if not k.startswith("before"))
-    assert run_parts == pytest.approx(res.wall_s, rel=1e-9)
+    timed = [v for k, v in parts.items() if not k.startswith("before") and k != "other"]
+    assert timed and min(timed) >= 0.0 and sum(timed) <= res.wall_s
     assert before + res.wall_s <= res.process["wall_s"] + 0.02      # /proc's clock ticks: 10 ms
     assert res.process["cpu_s"] > 0.0
     assert "process: wall" in res.timing_report

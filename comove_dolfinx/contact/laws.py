@@ -3,17 +3,20 @@
 Tractions on the body are per unit reference area (per unit reference thickness in plane stress):
 contact traction = p n_o + q t_o, pressure p >= 0, t_o = (-n_o[1], n_o[0]).
 
-* Penalty:  p = gamma [-g]_+.
-* Nitsche (theta = 1, 0, -1), with the nominal normal traction p(u) = n_o . (P N) of the current stress:
-      R_n = -(theta/gamma) p(u) p'(u; v) + (1/gamma) [p(u) - gamma g]_+ (theta p'(u; v) - gamma n_o.v),
-  which is the exact traction term -p n_o.v whenever p = [p - gamma g]_+.
-* Coulomb friction with a slip threshold s and slip increment ds (a length along t_o), with the
-  tangential weight gamma_t (a stiffness per unit area, like gamma):
-      penalty:  q = -P_s(gamma_t (e_n + ds)), with e_n the elastic (stick) part carried over (a length);
-      Nitsche:  q = P_s(q(u) - gamma_t ds), q(u) = t_o . (P N), and the theta-terms as for the normal part;
-  P_s(x) = x for |x| <= s, s sign(x) otherwise. The threshold s = mu p is the caller's: mu times a
-  lagged pressure (no derivative) or mu times the pressure these functions return for the current
-  iterate (the Coulomb law: UFL differentiates it with the rest).
+::
+
+    * Penalty:  p = gamma [-g]_+.
+    * Nitsche (theta = 1, 0, -1), with the nominal normal traction p(u) = n_o . (P N) of the current stress:
+          R_n = -(theta/gamma) p(u) p'(u; v) + (1/gamma) [p(u) - gamma g]_+ (theta p'(u; v) - gamma n_o.v),
+      which is the exact traction term -p n_o.v whenever p = [p - gamma g]_+.
+    * Coulomb friction with a slip threshold s and slip increment ds (a length along t_o), with the
+      tangential weight gamma_t (a stiffness per unit area, like gamma):
+          penalty:  q = -P_s(gamma_t (e_n + ds)), with e_n the elastic (stick) part carried over (a length);
+          Nitsche:  q = P_s(q(u) - gamma_t ds), q(u) = t_o . (P N), and the theta-terms as for the normal part;
+      P_s(x) = x for |x| <= s, s sign(x) otherwise. The threshold s = mu p is the caller's: mu times a
+      lagged pressure (no derivative) or mu times the pressure these functions return for the current
+      iterate (the Coulomb law: UFL differentiates it with the rest).
+
 Each function returns the residual integrand (linear in the test function v) with what the outputs
 need; none keeps state, so each can be differentiated and Taylor-tested alone.
 """
@@ -28,7 +31,7 @@ def positive_part(x):
 
 
 def clip(x, s):
-    """P_s(x), the projection onto [-s, s]; |x| = s counts as stick, so with s = 0 (no pressure yet) a
+    """P_s(x), the projection onto [-s, s]; ``|x| = s`` counts as stick, so with s = 0 (no pressure yet) a
     zero slip keeps the stick stiffness instead of a singular tangent."""
     return ufl.conditional(ufl.le(abs(x), s), x, s * ufl.sign(x))
 

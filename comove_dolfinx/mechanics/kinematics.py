@@ -232,7 +232,7 @@ def physical_components(T, F, kind: str = "contravariant"):
     """Physical components of a Cartesian tensor T on the convected base g_I = F e_I (no sums).
 
     kind = "contravariant": T<IJ> = T^IJ sqrt(C_II C_JJ), T^IJ = (F^-1 T F^-T)_IJ (components on the
-    unit base vectors g_I/|g_I|); "covariant": T_IJ / sqrt(C_II C_JJ), T_IJ = (F^T T F)_IJ (projections
+    unit base vectors ``g_I / |g_I|``); "covariant": T_IJ / sqrt(C_II C_JJ), T_IJ = (F^T T F)_IJ (projections
     on the unit base vectors); "mixed": T^I_J sqrt(C_II / C_JJ), T^I_J = (F^-1 T F)_IJ.
     """
     C = metric(F)

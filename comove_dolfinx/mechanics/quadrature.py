@@ -52,7 +52,7 @@ class QuadratureRule:
         return f
 
     def view(self, f: fem.Function) -> np.ndarray:
-        """The values of a quadrature function as an array (points, *shape) sharing its memory."""
+        """The values of a quadrature function as an array ``(points, *shape)`` sharing its memory."""
         shape = f.ufl_shape
         return f.x.array.reshape((self.size,) + tuple(shape))
 
@@ -66,7 +66,7 @@ class QuadratureRule:
 
     def cell_average(self, values: np.ndarray) -> np.ndarray:
         """Cell averages of per-point values (points, ...) -> (cells, ...): the integral over each cell
-        (of the mesh as it is, curved cells too: the weights times |det J| at the points) divided by
+        (of the mesh as it is, curved cells too: the weights times ``|det J|`` at the points) divided by
         its area."""
         if getattr(self, "_average_weights", None) is None:
             detJ = ufl.JacobianDeterminant(self.mesh)

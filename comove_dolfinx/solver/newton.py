@@ -113,7 +113,7 @@ class NewtonSettings:
 
 class Newton(LineSearches):
     """Newton-Raphson on ``model.u`` with an exact Jacobian and a direct solver (MUMPS unless the
-    PETSc options under the prefix comove_ choose another solver)."""
+    PETSc options under the prefix ``comove_`` choose another solver)."""
 
     def __init__(self, model: Model, settings: NewtonSettings | None = None,
                  timer: Timer | None = None):

@@ -33,7 +33,7 @@ class Check:
 
     @property
     def error(self) -> float:
-        """Relative error |result - reference| / |reference| (absolute where the reference is 0)."""
+        """Relative error ``|result - reference| / |reference|`` (absolute where the reference is 0)."""
         scale = abs(self.reference) if self.reference != 0 else 1.0
         return abs(self.result - self.reference) / scale
 
