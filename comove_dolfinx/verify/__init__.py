@@ -62,4 +62,4 @@ class Check:
         return "skipped" if self.skipped else ("ok" if self.ok else "FAIL")
 
     def row(self) -> dict:
-        return {**asdict(self), "error": self.error, "ok": self.ok, "status": self.status}
+        return {**asdict(self), "error": float(self.error), "ok": bool(self.ok), "status": self.status}

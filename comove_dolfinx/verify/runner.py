@@ -139,6 +139,11 @@ def main(names: list[str], out: pathlib.Path, small: bool = False) -> int:
     return 1 if failed else 0
 
 
+def _plain(value):
+    """NumPy scalars as Python numbers for JSON."""
+    return value.item() if hasattr(value, "item") else str(value)
+
+
 def run_case(name: str, out: pathlib.Path, small: bool) -> int:
     """In the case's own process: run it and write out/NAME.json (rank 0)."""
     import importlib
@@ -148,7 +153,7 @@ def run_case(name: str, out: pathlib.Path, small: bool) -> int:
     checks = module.run(out, small=small)
     from mpi4py import MPI
     if MPI.COMM_WORLD.rank == 0:
-        (out / f"{name}.json").write_text(json.dumps([c.row() for c in checks], indent=1))
+        (out / f"{name}.json").write_text(json.dumps([c.row() for c in checks], indent=1, default=_plain))
     return 0
 
 
