@@ -5,7 +5,7 @@ The cylinder (R = 1, E = 1000, nu = 0.3) is modelled by the quarter x >= 0 of it
 down by d = 0.0095 in two increments onto the frictionless rigid plane y = 0 (Nitsche, gamma0 = 10).
 For the force P per unit length of the whole cylinder (twice the quarter's, ContactForce), Hertz's
 line contact has the half-width a = sqrt(4 P R / (pi E*)), E* = E / (1 - nu^2), the peak pressure
-p0 = 2 P / (pi a) and the pressure p0 sqrt(1 - x^2 / a^2) [Johnson 1985, sec. 4.3 and 5.x]; here
+p0 = 2 P / (pi a) and the pressure p0 sqrt(1 - x^2 / a^2) [Johnson 1985, ch. 4 and 5]; here
 a / R = 0.074.
 
 Measures: a is the current length of the contact set of the quarter (ContactLength: the boundary
@@ -32,7 +32,7 @@ from .common import accepts_update, profile, run_job, save_figure, skipped
 
 NAME = "hertz_line"
 TITLE = "Hertz line contact"
-SOURCE = "Johnson 1985, sec. 4.3"
+SOURCE = "Johnson 1985, ch. 4 and 5"
 
 R, E, NU, DEPTH = 1.0, 1000.0, 0.3, 0.0095
 ES = E / (1 - NU ** 2)
