@@ -272,9 +272,11 @@ def _verify(args) -> int:
     import pathlib
 
     from .verify import runner
-    names, err = runner.check_args(args.case, args.out)
-    if err is None and _ranks() > 1:
+    names, err = [], None
+    if _ranks() > 1:
         err = "verify: it runs each case as a process of its own: start it without mpirun"
+    else:
+        names, err = runner.check_args(args.case, args.out)
     if err is not None:
         print(f"comove: {err}", file=sys.stderr)
         return 2

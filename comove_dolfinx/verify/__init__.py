@@ -16,8 +16,8 @@ Nothing heavy is imported here: the command checks its arguments before dolfinx 
 """
 from __future__ import annotations
 
-import importlib.util
 import math
+import pathlib
 from dataclasses import asdict, dataclass
 
 #: every case by its name on the command line (the name of its module in this package)
@@ -25,8 +25,9 @@ CASES = ("patch", "hertz_line", "hertz_sphere", "indentation", "cattaneo_mindlin
 
 
 def available(name: str) -> bool:
-    """Whether the case ``name`` has its module in this package (found without importing it)."""
-    return name in CASES and importlib.util.find_spec(f"{__name__}.{name}") is not None
+    """Whether the case ``name`` has its module in this package's folder (not imported here; an
+    editable install's finder could otherwise offer a module of another checkout)."""
+    return name in CASES and (pathlib.Path(__file__).parent / f"{name}.py").is_file()
 
 
 @dataclass

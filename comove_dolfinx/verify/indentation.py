@@ -61,9 +61,8 @@ def hertz_force(d: float) -> float:
 def _mesh(path: pathlib.Path, grading: float, comm):
     """The block [0, W] x [0, H] (r, z), triangles of size grading x the distance to (0, H), at least
     a tenth of the elastic stage's contact radius; facet groups axis, bottom, right, top."""
-    import comove_dolfinx as cm
+    from ..geometry import gmsh_session       # on every rank: its import initialises PETSc (collective)
     if comm.rank == 0 and not path.exists():
-        from ..geometry import gmsh_session
         gmsh = gmsh_session.gmsh
         gmsh_session.start()
         try:
@@ -94,6 +93,7 @@ def _mesh(path: pathlib.Path, grading: float, comm):
         finally:
             gmsh_session.stop()
     comm.barrier()
+    import comove_dolfinx as cm
     return cm.load_msh(path, comm, required=("axis", "bottom", "top"))
 
 
@@ -109,7 +109,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     contact = cm.Contact("top", sphere, method="nitsche", gamma0=10.0)
     f1 = D_ELASTIC / D_MAX
     steps = [cm.Step(2, ramp={contact: f1}, name="elastic"),
-             cm.Step(12 if small else 40, ramp={contact: lambda s: f1 * (1 / f1) ** s}, name="plastic")]
+             cm.Step(24 if small else 40, ramp={contact: lambda s: f1 * (1 / f1) ** s}, name="plastic")]
     probes = [cm.ContactForce(contact, "P", component=1, scale=-1.0), cm.ContactLength(contact, "a"), cm.MaxPlasticStrain(),
               cm.Value("d", lambda model: -sphere.displacement(contact.factor)[1])]
     job = cm.Job(body, [cm.Fixed("bottom"), cm.Fixed("axis", component=0), contact], steps, probes)

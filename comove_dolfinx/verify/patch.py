@@ -42,9 +42,8 @@ TOL = 1e-8
 def _mesh(path: pathlib.Path, strip: bool, size: float, comm):
     """The block meshed by gmsh (rank 0) into ``path``: unstructured triangles whose size varies from
     corner to corner; with ``strip``, one structured row of congruent triangles along the bottom."""
-    import comove_dolfinx as cm
+    from ..geometry import gmsh_session       # on every rank: its import initialises PETSc (collective)
     if comm.rank == 0 and not path.exists():
-        from ..geometry import gmsh_session
         gmsh = gmsh_session.gmsh
         gmsh_session.start()
         try:
@@ -91,6 +90,7 @@ def _mesh(path: pathlib.Path, strip: bool, size: float, comm):
         finally:
             gmsh_session.stop()
     comm.barrier()
+    import comove_dolfinx as cm
     return cm.load_msh(path, comm, required=("left", "right", "bottom", "top"))
 
 
