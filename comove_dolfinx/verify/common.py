@@ -38,15 +38,17 @@ def run_job(job, comm=MPI.COMM_WORLD):
     return res, int(sum(res.newton_its) + res.failed_its), cpu
 
 
-def profile(contact, model, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """(current coordinate ``axis``, contact pressure per current area) at every node of the contact
-    boundary, gathered on every rank and sorted along ``axis``: the nodal pressure field of
-    ``contact.update_fields()`` at the nodes the item lists (``contact.nodes``, ``node_sdof``)."""
+def profile(contact, model, axis: int = 0, current: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """(coordinate ``axis``, contact pressure) at every node of the contact boundary, gathered on
+    every rank and sorted along ``axis``: the nodal pressure field of ``contact.update_fields()`` at
+    the nodes the item lists (``contact.nodes``, ``node_sdof``), at the current coordinate X + u or,
+    with ``current=False``, the reference one X (the coordinate of a geometrically linear theory)."""
     contact.update_fields()
     nodes, sdof = contact.nodes, contact.node_sdof
     keep = sdof >= 0
-    X = model.V.tabulate_dof_coordinates()[nodes[keep], axis]
-    x = X + model.u.x.array.reshape(-1, 2)[nodes[keep], axis]
+    x = model.V.tabulate_dof_coordinates()[nodes[keep], axis]
+    if current:
+        x = x + model.u.x.array.reshape(-1, 2)[nodes[keep], axis]
     p = contact.pressure.x.array[sdof[keep]]
     comm = model.comm
     x, p = np.concatenate(comm.allgather(x)), np.concatenate(comm.allgather(p))
