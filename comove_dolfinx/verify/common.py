@@ -73,11 +73,6 @@ def skipped(benchmark: str, source: str, quantity: str, reference: float, tolera
     return Check(benchmark, source, quantity, reference, float("nan"), tolerance, skipped=why)
 
 
-def relative_spread(values: np.ndarray, reference: float) -> float:
-    """Largest |value - reference| / |reference| over ``values``."""
-    return float(np.max(np.abs(np.asarray(values) - reference)) / abs(reference))
-
-
 def save_figure(fig, out: pathlib.Path, name: str, comm=MPI.COMM_WORLD) -> None:
     """Write ``fig`` to out/name.png on rank 0 and close it."""
     import matplotlib.pyplot as plt

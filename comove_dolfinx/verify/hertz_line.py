@@ -151,6 +151,9 @@ def _plot(out, rows, comm):
     for y in (-1, 1):
         a1.axhline(y, color="k", ls=":", lw=0.8)
     a1.set_xscale("log")
+    hs = sorted({r["hc"] for r in rows})
+    a1.set_xticks(hs, [f"{h:g}" for h in hs])
+    a1.minorticks_off()
     a1.set_xlabel("element size in the contact zone")
     a1.set_ylabel("error against Hertz (%)")
     a1.set_title("convergence series (dotted: the 1 % tolerance of a and p0)", fontsize=9)

@@ -11,7 +11,7 @@ p0 = 2798.33 at d = 2: the same numbers.
 
 Hertz's theory is that of a half-space loaded far from its boundaries (a << R). The hemisphere
 pressed by its equatorial plane departs from it by an amount of the order of a / R: measured here,
-the force at a given approach exceeds Hertz's by about 0.5 to 0.6 a / R (0.9 % at a / R = 0.02, 13 %
+the force at a given approach exceeds Hertz's by 0.45 to 0.63 times a / R (0.9 % at a / R = 0.02, 13 %
 at a / R = 0.2 with the small-strain update), since the approach is imposed R below the contact
 instead of at infinity, and at d = 2 (a / R = 0.2; strain p0 / E* = 0.13) a and p0 come out 3 to
 4.5 % above the stated 10 and 2798.3, with either update. The relations between the force and the

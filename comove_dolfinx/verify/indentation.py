@@ -110,8 +110,8 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     f1 = D_ELASTIC / D_MAX
     steps = [cm.Step(2, ramp={contact: f1}, name="elastic"),
              cm.Step(24 if small else 40, ramp={contact: lambda s: f1 * (1 / f1) ** s}, name="plastic")]
-    probes = [cm.ContactForce(contact, "P", component=1, scale=-1.0), cm.ContactLength(contact, "a"), cm.MaxPlasticStrain(),
-              cm.Value("d", lambda model: -sphere.displacement(contact.factor)[1])]
+    probes = [cm.ContactForce(contact, "P", component=1, scale=-1.0), cm.ContactLength(contact, "a"),
+              cm.MaxPlasticStrain(), cm.Value("d", lambda model: -sphere.displacement(contact.factor)[1])]
     job = cm.Job(body, [cm.Fixed("bottom"), cm.Fixed("axis", component=0), contact], steps, probes)
     res, its, cpu = run_job(job, comm)
     d, P, a, ep = res["d"], res["P"], res["a"], res["max_plastic_strain"]
@@ -133,8 +133,9 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     if comm.rank == 0:
         from ..tables import write_table
         write_table(out / f"{NAME}_history.csv",
-                    [{"d": di, "P": Pi, "a": ai, "p_m/Y": pmi / Y, "E*a/(RY)": ES * ai / (R * Y), "max_plastic_strain": e,
-                      "newton_its": n} for di, Pi, ai, pmi, e, n in zip(d, P, a, pm, ep, res["newton_its"])])
+                    [{"d": di, "P": Pi, "a": ai, "p_m/Y": pmi / Y, "E*a/(RY)": ES * ai / (R * Y),
+                      "max_plastic_strain": e, "newton_its": n}
+                     for di, Pi, ai, pmi, e, n in zip(d, P, a, pm, ep, res["newton_its"])])
     _plot(out, d, P, a, pm_fit, comm)
     return checks
 
