@@ -8,7 +8,11 @@ Each case is a module of this package with
 * ``run(out: pathlib.Path, small: bool = False) -> list[Check]``: builds the problem with the public
   API, runs it, writes ``out/NAME.png`` (and whatever tables it keeps) and returns one
   :class:`Check` per compared quantity. ``small`` takes the coarse mesh of the test suite, with the
-  tolerance that mesh is known to reach.
+  tolerance that mesh is known to reach. A quantity that needs a feature this version lacks is
+  returned as a skipped check (``skipped`` says why), which the table shows and which is no failure.
+
+The command (verify/runner.py) runs each case as a process of its own and gathers the checks into
+one table; it exits with 0 only when every check holds.
 
 Nothing heavy is imported here: the command checks its arguments before dolfinx is loaded.
 :data:`CASES` lists the cases by name in the order ``all`` runs them; a name whose module is not
