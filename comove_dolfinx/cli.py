@@ -3,6 +3,7 @@
     comove run SCENE --out DIR [--set key=value ...] [-v] [--no-progress]
     comove run PROBLEM.toml --out DIR [-v] [--no-progress]
     comove scenes
+    comove verify NAME|all --out DIR [--small]
 """
 from __future__ import annotations
 
@@ -206,9 +207,15 @@ def main(argv=None) -> int:
     st.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2)")
     st.add_argument("--quick", action="store_true", help="the updates' sweeps only, fewer increments")
     st.add_argument("--replot", action="store_true", help="charts and summaries again from the saved runs")
+    ve = sub.add_parser("verify", help="the verification cases against published results (docs/verification.md)")
+    ve.add_argument("case", help="a case's name, or all")
+    ve.add_argument("--out", default="results/verify", help="output folder (default results/verify)")
+    ve.add_argument("--small", action="store_true", help="the coarse meshes of the test suite")
     args = parser.parse_args(argv)
     if args.command == "study":
         return _study(args)
+    if args.command == "verify":
+        return _verify(args)
     if args.command == "run":
         err = _check_early(args)
         if err is not None:
@@ -258,6 +265,22 @@ def _study(args) -> int:
         print(f"comove: {err}", file=sys.stderr)
         return 2
     return study_main(scenes, out, args.repeat, args.jobs, args.quick, args.replot)
+
+
+def _verify(args) -> int:
+    """Each case runs as a process of its own (verify/runner.py): nothing heavy is loaded here."""
+    import pathlib
+
+    from .verify import runner
+    names, err = [], None
+    if _ranks() > 1:
+        err = "verify: it runs each case as a process of its own: start it without mpirun"
+    else:
+        names, err = runner.check_args(args.case, args.out)
+    if err is not None:
+        print(f"comove: {err}", file=sys.stderr)
+        return 2
+    return runner.main(names, pathlib.Path(args.out), args.small)
 
 
 def _own_signals() -> None:
