@@ -6,7 +6,7 @@ own methods (``zone``, ``zone_edges``, ``profile``, ``peak_pressure``, ``pressur
 Units and signs: those of the model. The traction of the obstacle on the body is p n_o + q t_o per
 unit current area, n_o the obstacle's normal (towards the body), t_o = (-n_o[1], n_o[0]); the
 pressure p >= 0. The contact laws give the pressure per unit reference area (``Contact.p_ref``);
-divided by the area stretch |J F^-T N| it is per current area (in axisymmetry the stretch includes the
+divided by the area stretch ``|J F^-T N|`` it is per current area (in axisymmetry the stretch includes the
 hoop stretch r / R, so the force is the integral of the traction times 2 pi r over the current
 boundary).
 

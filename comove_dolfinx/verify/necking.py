@@ -15,9 +15,9 @@ References:
 
 * CalculiX (ccx 2.20, Debian 12), our own deck of the same structured grid (cm.necking_bar_grid,
   5 x 40 cells) with CAX8R elements (eight nodes, reduced integration), NLGEOM, the law as a
-  *PLASTIC table within 1e-5 GPa of it (:func:`plastic_table`), fixed increments (*STATIC, DIRECT);
+  ``*PLASTIC`` table within 1e-5 GPa of it (:func:`plastic_table`), fixed increments (``*STATIC, DIRECT``);
   docs/verification/necking_calculix.inp (140 increments) and the histories at 140 and 560
-  increments (necking_calculix.csv, necking_calculix_560.csv; the 560 deck differs in the *STATIC
+  increments (necking_calculix.csv, necking_calculix_560.csv; the 560 deck differs in the ``*STATIC``
   line only). ``python -m comove_dolfinx.verify.necking --calculix DIR`` writes and runs the deck again.
 * The straight bar's homogeneous response in closed form (:func:`homogeneous`), until the neck forms.
 
