@@ -48,9 +48,9 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
-from ufl.algorithms.analysis import extract_coefficients, extract_type
 
 from .. import compat
+from ..mechanics.ufl_dag import unique_nodes
 from .obstacles import ContactError
 
 # the reference cells' facets: (first vertex, second vertex, outward normal), dolfinx's numbering
@@ -242,6 +242,24 @@ def _chains(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
     return np.array(order, dtype=np.int64), np.array(flipped, dtype=bool), np.array(piece, dtype=np.int64)
 
 
+
+def _terminals(exprs) -> tuple[list, list]:
+    """(coefficients, constants) that the UFL expressions ``exprs`` depend on, each once; the walk
+    marks the nodes it has seen by identity (mechanics/ufl_dag.py says why)."""
+    seen, funcs, consts = set(), {}, {}
+    stack = list(exprs)
+    while stack:
+        e = stack.pop()
+        if id(e) in seen:
+            continue
+        seen.add(id(e))
+        if isinstance(e, ufl.Coefficient):
+            funcs[id(e)] = e
+        elif isinstance(e, ufl.Constant):
+            consts[id(e)] = e
+        stack.extend(e.ufl_operands)
+    return list(funcs.values()), list(consts.values())
+
 class ContactOutputs:
     """The results of one contact item (built by the item's ``attach``, at the end).
 
@@ -334,9 +352,8 @@ class ContactOutputs:
         new key): the values of their functions and constants (found once, under ``name``).
         Collective."""
         if name not in self._depends:
-            funcs = {id(c): c for e in exprs for c in extract_coefficients(e)}
-            consts = {id(c): c for e in exprs for c in extract_type(e, ufl.Constant) if c is not self._nref}
-            self._depends[name] = (list(funcs.values()), list(consts.values()))
+            funcs, consts = _terminals(exprs)
+            self._depends[name] = (funcs, [c for c in consts if c is not self._nref])
         funcs, consts = self._depends[name]
         key = tuple(hash(f.x.array.tobytes()) for f in funcs) + tuple(np.asarray(c.value).tobytes() for c in consts)
         return bool(self.comm.allreduce(key != last_key, op=MPI.LOR)), key
@@ -449,7 +466,7 @@ class ContactOutputs:
         """The profile's columns at the six points (end, four Gauss points, end) of every facet of
         the boundary, (facets, 6, columns), in the order of the ranks' facets, on every rank."""
         if self._pexpr is None:
-            self._pexpr = compat.expression(self._pexpr_ufl, self._points)
+            self._pexpr = compat.expression(unique_nodes(self._pexpr_ufl), self._points)
         nc, npt = len(_COLUMNS), self._npts
         local = np.zeros((len(self._pfacets), npt, nc))
         for k, nr in enumerate(self._normals):
