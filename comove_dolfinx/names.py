@@ -2,8 +2,8 @@
 implement them check that they implement exactly these."""
 
 MODELS = ("plane_strain", "plane_stress", "axisymmetric")
-UPDATES = ("sr", "hughes_winget", "polar", "svk", "neo_hooke", "small_strain")
-PLASTIC_UPDATES = ("sr", "hughes_winget", "small_strain")   # those that carry a rotated old stress
+UPDATES = ("sr_log", "sr", "hughes_winget", "polar", "svk", "neo_hooke", "small_strain")
+PLASTIC_UPDATES = ("sr_log", "sr", "hughes_winget", "small_strain")   # those that carry a rotated old stress
 CONTACT_METHODS = ("penalty", "nitsche")
 FRICTION_LAWS = ("coulomb", "lagged")        # the threshold: current pressure, or the last increment's
 PREDICTORS = {"none": False, "linear": 1, "quadratic": 2, "tangent": "tangent"}

@@ -240,7 +240,7 @@ def build(data: dict, comm, writers=()):
     hard = Hardening([p for p, _ in table], [s for _, s in table]) if table else None
     law = m.get("law", "elastic")
     material = as_material(m["E"], m["nu"], None if law == "elastic" else law, hard)
-    body = Body(md, b["kind"], material, update=b.get("update", "sr"), degree=b.get("degree", 2),
+    body = Body(md, b["kind"], material, update=b.get("update", "sr_log"), degree=b.get("degree", 2),
                 thickness=b.get("thickness", 1.0))
     named = {}
     for spec in data["items"]:

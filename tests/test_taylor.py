@@ -137,10 +137,14 @@ def _assert_second_order(orders, text):
 CASES = (
     # every stress update in every 2D model (elastic), frictionless penalty contact
     [dict(kind=k, update=u, friction="none") for k in ("plane_strain", "plane_stress", "axisymmetric")
-     for u in ("sr", "hughes_winget", "polar", "svk", "neo_hooke")]
+     for u in ("sr", "sr_log", "hughes_winget", "polar", "svk", "neo_hooke")]
     # plasticity: both laws in every model (S-R update), and with Hughes-Winget
     + [dict(kind=k, law=law) for k in ("plane_strain", "plane_stress", "axisymmetric")
        for law in ("j2", "chen")]
+    # the S-R update with logarithmic increments: its closed-form derivative with plasticity in every
+    # model, and under Nitsche's facet stress with slip
+    + [dict(kind=k, update="sr_log", law="j2") for k in ("plane_strain", "plane_stress", "axisymmetric")]
+    + [dict(update="sr_log", law="chen"), dict(update="sr_log", law="j2", method="nitsche", theta=0)]
     + [dict(update="hughes_winget", law=law) for law in ("j2", "chen")]
     # the same laws' NumPy return map (finalize(compiled_return=False))
     + [dict(kind=k, law=law, compiled=False) for k, law in

@@ -59,7 +59,7 @@ class NoRotationUpdate(updates.StressUpdate):
         return updates.UpdateExpr(sig, sig)
 
 
-@pytest.mark.parametrize("update", ["sr", "hughes_winget", "polar", "no_rotation"])
+@pytest.mark.parametrize("update", ["sr", "sr_log", "hughes_winget", "polar", "no_rotation"])
 def test_objectivity_rigid_rotation(square, update, monkeypatch):
     """A pre-stressed block turned by 90 degrees in three rigid increments keeps its stress, rotated."""
     monkeypatch.setitem(updates.UPDATES, "no_rotation", NoRotationUpdate)
@@ -156,8 +156,35 @@ def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n):
     assert n * err == pytest.approx(1.0 / (4.0 * np.log(2.0)), rel=0.1)
 
 
+@pytest.mark.parametrize("n", [10, 40])
+def test_uniaxial_stress_sr_log_is_second_order(tmp_path, n):
+    """The same bar with the logarithmic increments (``sr_log``): each increment adds
+    E * 2 (r - 1) / (r + 1), r = lambda_k+1 / lambda_k, which is E ln r to within E (r - 1)^3 / 12,
+    so the sum tends to E ln(lambda) at second order: the error times n^2 is the constant
+    sum over k of (r_k - 1)^3 / 12 times n^2 / ln 2 (about 0.5 / (12 ln 2) here), where ``sr``'s
+    error times n is."""
+    E, lam = 1000.0, 2.0
+    md = geometry.rectangle(2.0, 1.0, 0.5, order=2, comm=MPI.COMM_WORLD, cache_dir=str(tmp_path))
+    m = Model(Body(md, "plane_stress", Elastic(E, 0.3), update="sr_log"),
+              [Fixed("left", component=0), Fixed("bottom", component=1),
+               Displacement("right", 2.0 * (lam - 1.0), component=0)])
+    m.finalize()
+    res = IncrementalSolver(m, StepSettings(n_steps=n, max_cutbacks=0)).run()
+    assert res.completed
+    sig = m.cauchy_stress()
+    lams = 1.0 + np.arange(n + 1) / n * (lam - 1.0)
+    r = lams[1:] / lams[:-1]
+    discrete = E * np.sum(2.0 * (r - 1.0) / (r + 1.0))
+    np.testing.assert_allclose(sig[:, 0], discrete, rtol=1e-9)
+    np.testing.assert_allclose(sig[:, [1, 2, 3]], 0.0, atol=1e-9 * E)
+    err = abs(discrete - E * np.log(lam)) / (E * np.log(lam))
+    # int_1^2 (dlam / lam)^3 / 12 summed: (1/n)^2 * int_1^2 lam^-3 dlam / 12 = 3 / (8 * 12 n^2)
+    assert n * n * err == pytest.approx(3.0 / (8.0 * 12.0 * np.log(2.0)), rel=0.1)
+
+
+@pytest.mark.parametrize("update", ["sr", "sr_log"])
 @pytest.mark.parametrize("kind", ["plane_strain", "plane_stress", "axisymmetric"])
-def test_sr_closed_form_linearisation_is_ufl_derivative(tmp_path, kind):
+def test_sr_closed_form_linearisation_is_ufl_derivative(tmp_path, kind, update):
     """The S-R update's derivatives in closed form (docs/theory.md section 3.2, Linearisation) are
     UFL's derivatives of its expressions: the matrices of int d sigma : Grad_3 v, for d sigma_tr and
     d sigma_rot, agree to round-off at a state with a stored stress, a rotating increment of 0.2 rad
@@ -168,7 +195,7 @@ def test_sr_closed_form_linearisation_is_ufl_derivative(tmp_path, kind):
     from comove_dolfinx import compat
     x0 = 0.5 if kind == "axisymmetric" else 0.0
     md = geometry.rectangle(1.0, 1.0, 0.5, order=2, x0=x0, comm=MPI.COMM_SELF, cache_dir=str(tmp_path))
-    m = _point_model(md, "sr", kind=kind)
+    m = _point_model(md, update, kind=kind)
     m.u_n.interpolate(lambda x: np.stack([0.05 * x[0] * x[1] + 0.02 * x[0], -0.03 * x[0] ** 2 + 0.01 * x[1]]))
     Q = _rot(0.2)
     m.u.interpolate(lambda x: np.stack([0.05 * x[0] * x[1] + 0.02 * x[0], -0.03 * x[0] ** 2 + 0.01 * x[1]])

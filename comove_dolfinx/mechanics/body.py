@@ -22,16 +22,17 @@ class Body:
     Parameters
     ----------
     mesh : geometry.MeshData
-        Mesh with named facet groups (``comove_dolfinx.mesh`` builds, reads or wraps one).
+        Mesh with named facet groups (``comove_dolfinx.geometry`` builds, reads or wraps one).
     kind : str
         "plane_strain", "plane_stress" (forces per unit thickness) or "axisymmetric" (x = r, y = z;
         forces are totals over the circumference).
     material : Elastic, J2 or Chen
         Elastic constants, or an elastic-plastic law with its hardening.
     update : str
-        Stress update: "sr" (Chen's S-R decomposition of the increment, default), "hughes_winget",
+        Stress update: "sr_log" (Chen's S-R decomposition of the increment with its strain measured
+        logarithmically, the default), "sr" (the S-R update as the paper writes it), "hughes_winget",
         "polar", "svk", "neo_hooke" (docs/theory.md section 3), or "small_strain" (linear
-        kinematics, section 3.5). Plastic bodies need sr, hughes_winget or small_strain.
+        kinematics, section 3.5). Plastic bodies need sr_log, sr, hughes_winget or small_strain.
     degree : int
         Lagrange degree of the displacement, 1 or 2 (P1 locks in bending).
     thickness : float
@@ -44,7 +45,7 @@ class Body:
     mesh: object
     kind: str = "plane_strain"
     material: object = None
-    update: str = "sr"
+    update: str = "sr_log"
     degree: int = 2
     thickness: float = 1.0
     quadrature_degree: int | None = None

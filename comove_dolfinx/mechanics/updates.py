@@ -7,10 +7,14 @@ there is one, and differentiates it with UFL for an exact Jacobian.
 
 Names (docs/theory.md section 3)::
 
-    ``sr``            (default) incremental S-R update: dH = F F_n^-1 - I, Chen's split dH -> (dS, dR),
+    ``sr``            incremental S-R update (Chen's, as the paper writes it): dH = F F_n^-1 - I, Chen's split dH -> (dS, dR),
                       sigma = dR sigma_n dR^T + C:dS. Objective for rigid increments; converges to the
                       Jaumann rate as the increments shrink.
-    ``hughes_winget`` mid-step dH = (F - F_n) F_mid^-1, dR = (I - dW/2)^-1 (I + dW/2),
+    ``sr_log``        (default) the S-R update with the increment's strain measured logarithmically:
+                  the same split and rotation, C:dE with dE = 2 (I - (I + dS/2)^-1) = ln(I + dS) +
+                  O(dS^3) in place of C:dS; the same limit as ``sr`` (the Jaumann rate), reached at
+                  second order in coaxial stretching instead of first.
+``hughes_winget`` mid-step dH = (F - F_n) F_mid^-1, dR = (I - dW/2)^-1 (I + dW/2),
                       sigma = dR sigma_n dR^T + C:sym(dH) (Jaumann integrator).
     ``polar``         Green-Naghdi: the unrotated stress s^ = R^T sigma R (polar R of F) is stored and
                       advanced by C:(R_mid^T sym(dH) R_mid); sigma = R s^ R^T.
@@ -108,15 +112,24 @@ class StressUpdate:
 
 
 class SRUpdate(StressUpdate):
-    """Incremental S-R update (docs/theory.md section 3.2), the project's default."""
+    """Incremental S-R update (docs/theory.md section 3.2), as Chen's papers write it: the strain
+    of the increment is the symmetric part dS of its split."""
 
     name = "sr"
+
+    def strain(self, dS):
+        """The increment's strain from the split's dS (3x3, block diagonal): dS itself."""
+        return dS
+
+    def strain_direction(self, dS, d_dS):
+        """The derivative of :meth:`strain` at dS in the direction d_dS."""
+        return d_dS
 
     def build(self, u, u_n, state_n):
         dH = increment_gradient(self.F(u), self.F(u_n))
         dS, dR, _ = sr_decomposition_in_plane(dH)      # the 2D models' rotation: one angle
         sig_rot = dR * to_tensor(state_n) * dR.T
-        sig = sig_rot + hooke(dS, self.elastic, self.kin.model)
+        sig = sig_rot + hooke(self.strain(dS), self.elastic, self.kin.model)
         return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
 
     def directional(self, u, u_n, state_n, du, up):
@@ -134,7 +147,34 @@ class SRUpdate(StressUpdate):
         s = up.sigma_rot
         a, b = s[0, 0] - s[1, 1], 2.0 * s[0, 1]
         drot = dtheta * ufl.as_tensor([[-b, a, 0], [a, b, 0], [0, 0, 0]])
+        dS = self.strain_direction(sr_decomposition_in_plane(H)[0], dS)
         return drot + hooke(dS, self.elastic, self.kin.model), drot
+
+
+def _half_step_inverse(dS):
+    """(I + dS/2)^-1 of a 3x3 tensor that is block diagonal (an in-plane 2x2 block and zz), in
+    closed form."""
+    m00, m01, m11 = 1.0 + 0.5 * dS[0, 0], 0.5 * dS[0, 1], 1.0 + 0.5 * dS[1, 1]
+    det = m00 * m11 - m01 * m01
+    return ufl.as_tensor([[m11 / det, -m01 / det, 0], [-m01 / det, m00 / det, 0],
+                          [0, 0, 1.0 / (1.0 + 0.5 * dS[2, 2])]])
+
+
+class SRLogUpdate(SRUpdate):
+    """The S-R update with the increment's strain measured logarithmically (docs/theory.md section
+    3.2, "Logarithmic increments"): dE = 2 (I - M^-1), M = I + dS/2, which is ln(I + dS) to within
+    dS^3 / 12 (the (1, 1) Pade approximant of the logarithm, applied to the symmetric dS: dE is
+    symmetric and coaxial with dS), and dE = 0 for a rigid increment. Its derivative in a direction
+    d_dS is M^-1 d_dS M^-1."""
+
+    name = "sr_log"
+
+    def strain(self, dS):
+        return 2.0 * (ufl.Identity(3) - _half_step_inverse(dS))
+
+    def strain_direction(self, dS, d_dS):
+        Minv = _half_step_inverse(dS)
+        return Minv * d_dS * Minv
 
 
 def _mid_step(F, F_n):
@@ -256,7 +296,7 @@ class SmallStrainUpdate(StressUpdate):
         return hooke(self.strain(du), self.elastic, self.kin.model), ufl.zero(3, 3)
 
 
-UPDATES = {cls.name: cls for cls in (SRUpdate, HughesWingetUpdate, PolarUpdate, SVKUpdate,
+UPDATES = {cls.name: cls for cls in (SRLogUpdate, SRUpdate, HughesWingetUpdate, PolarUpdate, SVKUpdate,
                                      NeoHookeUpdate, SmallStrainUpdate)}
 
 
