@@ -24,7 +24,7 @@ def _hertz_job(disc, method, gamma0, probes=(), writers=(), kind="plane_strain",
     items = [cm.Fixed("xsym", component=0), cm.Displacement("top", -depth, component=1), contact]
     probes = [cm.ContactForce(contact, "force", component=None), cm.ContactEdges(contact, "edge"),
               cm.ContactLength(contact, "length"), cm.ContactPeak(contact, "peak"), *probes]
-    job = cm.Job(cm.Body(disc, kind, cm.Elastic(E, NU)), items, [cm.Step(2)], probes, writers=list(writers))
+    job = cm.Job(cm.Body(disc, kind, cm.Elastic(E, NU), update="sr"), items, [cm.Step(2)], probes, writers=list(writers))
     res = job.run()
     assert res.completed, res.message
     return contact, res

@@ -217,7 +217,8 @@ def test_a_restart_goes_on_as_the_run_would_have(cache, tmp_path):
     Newton iterations in every increment, the same force)."""
     from comove_dolfinx.io.checkpoint import Checkpoint
     full = _pull(cache, predictor="none")
-    assert full.failures == {failures.INADMISSIBLE: 1} and full.increments[6].retries == 1        # at 0.35 of the pull
+    retried = [k for k, inc in enumerate(full.increments) if inc.retries]
+    assert full.failures == {failures.INADMISSIBLE: 1} and len(retried) == 1 and retried[0] < 11
     folder = tmp_path / "checkpoint"
     with pytest.raises(KeyboardInterrupt):
         _pull(cache, writers=[Checkpoint(folder, every=1, interval=0.0), _StopAt(12)], predictor="none")

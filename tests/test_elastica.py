@@ -17,9 +17,10 @@ def read_history(path):
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
 
 
-@pytest.mark.parametrize("update", list(UPDATES))
+@pytest.mark.parametrize("update", [name for name, cls in UPDATES.items() if cls.geometric])
 def test_elastica_tip(update, mpi_tmp):
-    """A continuum cantilever with L/h = 40 follows the elastica to well within 0.5 % (shear and
+    """Every finite-strain update (linear kinematics cannot rotate the beam): a continuum cantilever
+    with L/h = 40 follows the elastica to well within 0.5 % (shear and
     extension of the continuum, neglected by the elastica, are O((h/L)^2) ~ 1e-3 here). The rate-form
     updates add a first-order increment error (measured at lam = 1: 0.5 % in v with 10 increments,
     0.05 % with 40), so they run with 20; the shortening L - x ~ v^2 doubles relative errors."""

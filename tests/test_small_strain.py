@@ -229,5 +229,5 @@ def test_small_strain_carries_both_plastic_laws(cache):
     msh = geometry.rectangle(1.0, 0.25, 0.125, order=2, comm=MPI.COMM_WORLD, cache_dir=cache)
     for law in (J2, Chen):
         Body(msh, "plane_strain", law(E, NU, Hardening.perfect(10.0)), update="small_strain")
-    with pytest.raises(MaterialError, match="use one of sr, hughes_winget, small_strain"):
+    with pytest.raises(MaterialError, match="use one of sr_log, sr, hughes_winget, small_strain"):
         Body(msh, "plane_strain", J2(E, NU, Hardening.perfect(10.0)), update="polar")

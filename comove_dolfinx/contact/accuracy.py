@@ -2,7 +2,7 @@
 
     python -m comove_dolfinx.contact.accuracy --out results/contact_accuracy
 
-A quarter of an elastic cylinder (R = 1, E = 1000, nu = 0.3, plane strain; ``quarter_disc`` with
+A quarter of an elastic cylinder (R = 1, E = 1000, nu = 0.3, plane strain, the update ``sr``; ``quarter_disc`` with
 element size h at the contact), its flat face pressed down by 0.02 onto a rigid flat, on four meshes,
 with penalty and Nitsche (theta = 0) at gamma0 = 10, 100, 1000. Against Hertz at the computed load P
 per unit length of the whole cylinder (twice the quarter's): half-width a = sqrt(4 P R / (pi E*)),
@@ -38,7 +38,7 @@ def hertz_run(size: float, method: str, gamma0: float, cache_dir="meshes", depth
     items = [cm.Fixed("xsym", component=0), cm.Displacement("top", -depth, component=1), contact]
     probes = [cm.ContactForce(contact, "P", component=1, scale=2.0), cm.ContactEdges(contact, "edge"),
               cm.ContactLength(contact, "half_width"), cm.ContactPeak(contact, "p_max")]
-    job = cm.Job(cm.Body(mesh, "plane_strain", cm.Elastic(E, NU)), items, [cm.Step(n_steps)], probes)
+    job = cm.Job(cm.Body(mesh, "plane_strain", cm.Elastic(E, NU), update="sr"), items, [cm.Step(n_steps)], probes)
     res = job.run()
     if not res.completed:
         raise RuntimeError(res.message)

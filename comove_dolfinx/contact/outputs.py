@@ -244,10 +244,11 @@ def _chains(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
 
 
 def _terminals(exprs) -> tuple[list, list]:
-    """(coefficients, constants) that the UFL expressions ``exprs`` depend on, each once; the walk
+    """(coefficients, constants) that the UFL expressions or forms ``exprs`` depend on, each once; the walk
     marks the nodes it has seen by identity (mechanics/ufl_dag.py says why)."""
     seen, funcs, consts = set(), {}, {}
-    stack = list(exprs)
+    stack = [i.integrand() for e in exprs if isinstance(e, ufl.Form) for i in e.integrals()]
+    stack += [e for e in exprs if not isinstance(e, ufl.Form)]
     while stack:
         e = stack.pop()
         if id(e) in seen:
