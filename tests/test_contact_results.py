@@ -196,7 +196,7 @@ def test_problem_file_peak_probe(disc, tmp_path):
     toml = tmp_path / "hertz.toml"
     toml.write_text(
         "[mesh]\nbuilder = 'quarter_disc'\nR = 1.0\nsize = 0.1\nsize_contact = 0.02\ncontact_zone = 0.2\n"
-        "[body]\nkind = 'plane_strain'\nmaterial = {E = 1000.0, nu = 0.3}\n"
+        "[body]\nkind = 'plane_strain'\nupdate = 'sr'\nmaterial = {E = 1000.0, nu = 0.3}\n"
         "[[items]]\ntype = 'fixed'\nboundary = 'xsym'\ncomponent = 0\n"
         "[[items]]\ntype = 'displacement'\nboundary = 'top'\nvalue = -0.02\ncomponent = 1\n"
         "[[items]]\ntype = 'contact'\nname = 'flat'\nboundary = 'contact'\n"
