@@ -243,7 +243,7 @@ class Ring(ContactScene):
     # tenth). At half the nominal the first attempt still failed at 5k, 18k and 45k dofs (10-13
     # iterations) and took 18 iterations with 64 residual evaluations at 1.4k; from an eighth no
     # attempt fails at any of those sizes, and the whole crush takes 156 instead of 163 iterations,
-    # 223 instead of 267 residuals at 1.4k (docs/performance.md, 2026-11-27 morning).
+    # 223 instead of 267 residuals at 1.4k (docs/performance.md, "The ring's first increment").
     first: float = 0.125
 
     def validate(self):

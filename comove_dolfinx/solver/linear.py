@@ -28,7 +28,7 @@ DEFAULTS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type":
 #: database (PETSC_OPTIONS) name them: no scaling (ICNTL(8) = 0). MUMPS's default (77) computes a
 #: scaling of the rows and columns at every factorisation, 9 to 21 % of a factorisation of the
 #: ring (1.4k to 45k dofs) and the plate (195k); every run of the stability map ends the same
-#: without it (docs/performance.md, "MUMPS without its scaling"). ``-comove_mat_mumps_icntl_8 77``
+#: without it (docs/performance.md, "The linear solver and its options"). ``-comove_mat_mumps_icntl_8 77``
 #: restores it.
 MUMPS_DEFAULTS = {"mat_mumps_icntl_8": 0}
 
