@@ -1,5 +1,5 @@
 """What the verification cases share: a job run with its cost, the contact pressure along a
-boundary, a skipped check, the cases' meshes folder.
+boundary, the cases' meshes folder.
 
 Imported by the case modules only (it loads dolfinx through the public API); the command's runner
 does not import it.
@@ -54,23 +54,6 @@ def profile(contact, model, axis: int = 0, current: bool = True) -> tuple[np.nda
     x, p = np.concatenate(comm.allgather(x)), np.concatenate(comm.allgather(p))
     order = np.argsort(x)
     return x[order], p[order]
-
-
-def accepts_update(mesh, update: str) -> bool:
-    """Whether ``cm.Body`` accepts the stress update ``update`` (a name it does not know is refused
-    with a BodyError)."""
-    import comove_dolfinx as cm
-    try:
-        cm.Body(mesh, "plane_strain", cm.Elastic(1.0, 0.3), update=update)
-    except cm.BodyError:
-        return False
-    return True
-
-
-def skipped(benchmark: str, source: str, quantity: str, reference: float, tolerance: float,
-            why: str) -> Check:
-    """A check that could not run here, reported with the reason (it counts as no failure)."""
-    return Check(benchmark, source, quantity, reference, float("nan"), tolerance, skipped=why)
 
 
 def save_figure(fig, out: pathlib.Path, name: str, comm=MPI.COMM_WORLD) -> None:

@@ -19,8 +19,7 @@ round-off on a mesh that has nothing regular about it [Taylor and Papadopoulos 1
 Measures: the nodal contact pressure along the bottom face (``contact.update_fields()``, a lumped
 projection of the quadrature points' pressure per current area, which reproduces a uniform pressure
 exactly), its largest and smallest value against p (1e-8 relative); the same at the facet quadrature
-points, where the contact law is evaluated, where ``contact.profile()`` gives them (skipped
-otherwise); and the contact force (ContactForce, from the residual) against p times the current
+points, where the contact law is evaluated (``contact.profile()``); and the contact force (ContactForce, from the residual) against p times the current
 width of the top face (1e-8).
 """
 from __future__ import annotations
@@ -31,7 +30,7 @@ import numpy as np
 from mpi4py import MPI
 
 from . import Check
-from .common import profile, run_job, save_figure, skipped, triangles
+from .common import profile, run_job, save_figure, triangles
 
 NAME = "patch"
 TITLE = "Contact patch test"
@@ -108,7 +107,7 @@ def _press(mesh, method: str, comm):
         def write(self, run, row, increment):
             keep["x"], keep["p"] = profile(contact, run.model)
             # the pressure at the facet quadrature points, where the contact law is evaluated
-            keep["pq"] = contact.profile().p if hasattr(contact, "profile") else None
+            keep["pq"] = contact.profile().p
             X = run.model.V.tabulate_dof_coordinates()[:, 0]
             x = X + run.model.u.x.array.reshape(-1, 2)[:, 0]
             keep["width"] = (run.model.comm.allreduce(float(x.max()), op=MPI.MAX)
@@ -142,8 +141,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
                              float(p.min()), TOL, its, cpu)]
             for key, fn in (("largest", np.max), ("smallest", np.min)):
                 name = f"{method}, {where}: {key} pressure at the quadrature points"
-                checks.append(skipped(bench, SOURCE, name, P, TOL, "contact.profile() is not in this version")
-                              if pq is None else Check(bench, SOURCE, name, P, float(fn(pq)), TOL, its, cpu))
+                checks.append(Check(bench, SOURCE, name, P, float(fn(pq)), TOL, its, cpu))
         checks.append(Check(bench, SOURCE, f"{method}, {where}: contact force / current width", P,
                             float(F[1] / width), TOL, its, cpu))
     _plot(out, curves, meshes)
