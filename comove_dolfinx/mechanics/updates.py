@@ -7,23 +7,23 @@ there is one, and differentiates it with UFL for an exact Jacobian.
 
 Names (docs/theory.md section 3)::
 
-    ``sr``            incremental S-R update (Chen's, as the paper writes it): dH = F F_n^-1 - I, Chen's split dH -> (dS, dR),
-                      sigma = dR sigma_n dR^T + C:dS. Objective for rigid increments; converges to the
-                      Jaumann rate as the increments shrink.
-    ``sr_log``        (default) the S-R update with the increment's strain measured logarithmically:
-                  the same split and rotation, C:dE with dE = 2 (I - (I + dS/2)^-1) = ln(I + dS) +
-                  O(dS^3) in place of C:dS; the same limit as ``sr`` (the Jaumann rate), reached at
-                  second order in coaxial stretching instead of first.
-``hughes_winget`` mid-step dH = (F - F_n) F_mid^-1, dR = (I - dW/2)^-1 (I + dW/2),
-                      sigma = dR sigma_n dR^T + C:sym(dH) (Jaumann integrator).
-    ``polar``         Green-Naghdi: the unrotated stress s^ = R^T sigma R (polar R of F) is stored and
-                      advanced by C:(R_mid^T sym(dH) R_mid); sigma = R s^ R^T.
-    ``svk``           total-Lagrangian St Venant-Kirchhoff: S = lambda tr(E) I + 2 mu E, sigma = F S F^T / J.
-    ``neo_hooke``     total-Lagrangian compressible neo-Hookean: sigma = (mu (b - I) + lambda ln J I) / J.
-    ``small_strain``  linear kinematics: eps = sym Grad3 u (the hoop strain u_r / r in axisymmetry),
-                      sigma = sigma_n + C:(eps - eps_n), nothing rotated; equilibrium, loads and contact
-                      tractions on the reference configuration (its ``F`` is the identity, and the model
-                      leaves out the geometric stiffness: ``geometric`` False).
+    sr_log        (default) the S-R update with the increment's strain measured logarithmically:
+                  the same split and rotation as sr, C:dE with dE = 2 (I - (I + dS/2)^-1)
+                  = ln(I + dS) + O(dS^3) in place of C:dS; the same limit as sr (the Jaumann rate),
+                  reached at second order in coaxial stretching instead of first.
+    sr            incremental S-R update (Chen's, as the paper writes it): dH = F F_n^-1 - I,
+                  Chen's split dH -> (dS, dR), sigma = dR sigma_n dR^T + C:dS. Objective for rigid
+                  increments; converges to the Jaumann rate as the increments shrink.
+    hughes_winget mid-step dH = (F - F_n) F_mid^-1, dR = (I - dW/2)^-1 (I + dW/2),
+                  sigma = dR sigma_n dR^T + C:sym(dH) (Jaumann integrator).
+    polar         Green-Naghdi: the unrotated stress s^ = R^T sigma R (polar R of F) is stored and
+                  advanced by C:(R_mid^T sym(dH) R_mid); sigma = R s^ R^T.
+    svk           total-Lagrangian St Venant-Kirchhoff: S = lambda tr(E) I + 2 mu E, sigma = F S F^T / J.
+    neo_hooke     total-Lagrangian compressible neo-Hookean: sigma = (mu (b - I) + lambda ln J I) / J.
+    small_strain  linear kinematics: eps = sym Grad3 u (the hoop strain u_r / r in axisymmetry),
+                  sigma = sigma_n + C:(eps - eps_n), nothing rotated; equilibrium, loads and contact
+                  tractions on the reference configuration (its F is the identity, and the model
+                  leaves out the geometric stiffness: geometric False).
 
 Plane stress: the hypoelastic updates use the reduced Lame constant on the in-plane increment, so
 sigma_zz = 0 identically; their thickness stretch is the exact integral of the elastic rate law,

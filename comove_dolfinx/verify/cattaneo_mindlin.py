@@ -2,12 +2,12 @@
 tangential force Q < mu P.
 
 Closed form (Johnson, Contact Mechanics, 1985, section 7.1; Cattaneo 1938; Mindlin 1949), in plane
-strain for a line contact of half-width a and peak pressure p0 (Hertz): a central zone |x| < c sticks,
-with
+strain for a line contact of half-width a and peak pressure p0 (Hertz): a central zone ``|x| < c``
+sticks, with::
 
     c = a sqrt(1 - Q / (mu P)),
 
-and the shear traction is the difference of two Hertz-like ellipses,
+and the shear traction is the difference of two Hertz-like ellipses::
 
     q(x) = mu p0 sqrt(1 - x^2 / a^2) - (c / a) mu p0 sqrt(1 - x^2 / c^2)   (|x| < c),
     q(x) = mu p0 sqrt(1 - x^2 / a^2)                                     (c <= |x| <= a).
