@@ -181,6 +181,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="comove", description="Large deformation of solids pressed against rigid obstacles "
         "by the co-moving S-R method.")
+    from . import __version__
+    parser.add_argument("--version", action="version", version=f"comove {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a scene or a problem file")
     run.add_argument("scene", help="scene name (see 'comove scenes') or a problem file (.toml, docs/api.md)")

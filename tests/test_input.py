@@ -143,3 +143,19 @@ def test_scenes_listing_into_a_closed_pipe():
     p.stdout.close()                              # before the command has written anything
     err = p.stderr.read().decode()
     assert p.wait(timeout=120) == 0 and "Traceback" not in err, err
+
+
+def test_version_is_the_package_metadata(capsys):
+    """`comove --version` names the version that pyproject.toml gives the package (and CHANGELOG.md's
+    newest entry), so that the three cannot drift apart."""
+    import pathlib
+    import re
+    import tomllib
+    root = pathlib.Path(__file__).resolve().parents[1]
+    version = tomllib.loads((root / "pyproject.toml").read_text())["project"]["version"]
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.strip() == f"comove {version}"
+    newest = re.search(r"^## (\S+)", (root / "CHANGELOG.md").read_text(), re.M).group(1)
+    assert newest == version
