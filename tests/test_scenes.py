@@ -1,5 +1,5 @@
 """The contact scenes end to end: the same history on one and two ranks, the warning for an obstacle
-that is never reached, and the elastica's accuracy with few large increments (issue 2's target)."""
+that is never reached, and the elastica's accuracy with few large increments."""
 
 import pytest
 from test_elastica import ELASTICA, _cli, read_history
@@ -40,7 +40,7 @@ def test_negative_gap_is_refused(tmp_path):
 
 @pytest.mark.mpi
 def test_elastica_one_percent_in_five_increments(mpi_tmp):
-    """Issue 2's target: the S-R update within 1 % of the elastica at lam = 5 in at most 10 equal
+    """The S-R update within 1 % of the elastica at lam = 5 in at most 10 equal
     increments, here 5, with no cut-back."""
     scene = get_scene("elastica", ["n_steps=5", "max_cutbacks=0"])
     res = run_scene(scene, mpi_tmp, progress=False)
