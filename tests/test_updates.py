@@ -130,18 +130,27 @@ def test_polar_simple_shear_follows_green_naghdi(shear_mesh, gamma, s12, s11):
     assert s[0] == pytest.approx(s11, abs=2e-3)
 
 
-@pytest.mark.parametrize("n", [10, 40])
-def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n):
-    """A plane-stress bar stretched to lambda = 2: sigma = E sum(lambda_k+1/lambda_k - 1) -> E ln 2.
+# an increment's strain in coaxial stretching with stretch ratio r, and the constant c of the relative
+# error c / n^order of the bar below: sr adds r - 1, which exceeds ln r by x^2/2 (x = dlam / lambda_k),
+# so the error is dlam (1 - 1/lambda) / (2 ln lambda) = 1 / (4 n ln 2); sr_log adds 2 (r - 1) / (r + 1),
+# short of ln r by x^3/12, so the error is sum_k x_k^3 / 12 / ln 2 = int_1^2 lambda^-3 dlam / (12 n^2 ln 2)
+# = 3 / (96 n^2 ln 2)
+UNIAXIAL = {"sr": (lambda r: r - 1.0, 1, 1.0 / (4.0 * np.log(2.0))),
+            "sr_log": (lambda r: 2.0 * (r - 1.0) / (r + 1.0), 2, 3.0 / (96.0 * np.log(2.0)))}
 
-    The bar is free laterally (sigma_yy = 0 from equilibrium, sigma_zz = 0 by plane stress), so the S-R
-    update adds E * dS_xx = E (lambda_k+1/lambda_k - 1) per increment exactly. Each term exceeds
-    ln(lambda_k+1/lambda_k) by x^2/2 (x = dlam/lambda_k), so the sum tends to E ln(lambda) at first
-    order: relative error ~ dlam (1 - 1/lambda) / (2 ln lambda) = 1/(4 n ln 2) here.
-    """
+
+@pytest.mark.parametrize("update", list(UNIAXIAL))
+@pytest.mark.parametrize("n", [10, 40])
+def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n, update):
+    """A plane-stress bar stretched to lambda = 2: sigma = E sum(e(lambda_k+1 / lambda_k)) -> E ln 2,
+    e the update's strain of an increment (UNIAXIAL). The bar is free laterally (sigma_yy = 0 from
+    equilibrium, sigma_zz = 0 by plane stress), so the update adds E e per increment exactly; the sum
+    tends to E ln(lambda) at first order with sr and at second order with sr_log, with the constants
+    of UNIAXIAL."""
+    strain, order, const = UNIAXIAL[update]
     E, lam = 1000.0, 2.0
     md = geometry.rectangle(2.0, 1.0, 0.5, order=2, comm=MPI.COMM_WORLD, cache_dir=str(tmp_path))
-    m = Model(Body(md, "plane_stress", Elastic(E, 0.3), update="sr"),
+    m = Model(Body(md, "plane_stress", Elastic(E, 0.3), update=update),
               [Fixed("left", component=0), Fixed("bottom", component=1),
                Displacement("right", 2.0 * (lam - 1.0), component=0)])
     m.finalize()
@@ -149,37 +158,11 @@ def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n):
     assert res.completed
     sig = m.cauchy_stress()
     lams = 1.0 + np.arange(n + 1) / n * (lam - 1.0)
-    discrete = E * np.sum(lams[1:] / lams[:-1] - 1.0)
+    discrete = E * np.sum(strain(lams[1:] / lams[:-1]))
     np.testing.assert_allclose(sig[:, 0], discrete, rtol=1e-9)
     np.testing.assert_allclose(sig[:, [1, 2, 3]], 0.0, atol=1e-9 * E)
     err = abs(discrete - E * np.log(lam)) / (E * np.log(lam))
-    assert n * err == pytest.approx(1.0 / (4.0 * np.log(2.0)), rel=0.1)
-
-
-@pytest.mark.parametrize("n", [10, 40])
-def test_uniaxial_stress_sr_log_is_second_order(tmp_path, n):
-    """The same bar with the logarithmic increments (``sr_log``): each increment adds
-    E * 2 (r - 1) / (r + 1), r = lambda_k+1 / lambda_k, which is E ln r to within E (r - 1)^3 / 12,
-    so the sum tends to E ln(lambda) at second order: the error times n^2 is the constant
-    sum over k of (r_k - 1)^3 / 12 times n^2 / ln 2 (about 0.5 / (12 ln 2) here), where ``sr``'s
-    error times n is."""
-    E, lam = 1000.0, 2.0
-    md = geometry.rectangle(2.0, 1.0, 0.5, order=2, comm=MPI.COMM_WORLD, cache_dir=str(tmp_path))
-    m = Model(Body(md, "plane_stress", Elastic(E, 0.3), update="sr_log"),
-              [Fixed("left", component=0), Fixed("bottom", component=1),
-               Displacement("right", 2.0 * (lam - 1.0), component=0)])
-    m.finalize()
-    res = IncrementalSolver(m, StepSettings(n_steps=n, max_cutbacks=0)).run()
-    assert res.completed
-    sig = m.cauchy_stress()
-    lams = 1.0 + np.arange(n + 1) / n * (lam - 1.0)
-    r = lams[1:] / lams[:-1]
-    discrete = E * np.sum(2.0 * (r - 1.0) / (r + 1.0))
-    np.testing.assert_allclose(sig[:, 0], discrete, rtol=1e-9)
-    np.testing.assert_allclose(sig[:, [1, 2, 3]], 0.0, atol=1e-9 * E)
-    err = abs(discrete - E * np.log(lam)) / (E * np.log(lam))
-    # int_1^2 (dlam / lam)^3 / 12 summed: (1/n)^2 * int_1^2 lam^-3 dlam / 12 = 3 / (8 * 12 n^2)
-    assert n * n * err == pytest.approx(3.0 / (8.0 * 12.0 * np.log(2.0)), rel=0.1)
+    assert n ** order * err == pytest.approx(const, rel=0.1)
 
 
 @pytest.mark.parametrize("update", ["sr", "sr_log"])
