@@ -8,7 +8,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .gmsh_session import gmsh
-from .meshes import _ARRANGEMENT, BODY_TAG, MeshData, _add_group, _build
+from .meshes import _ARRANGEMENT, BODY_TAG, MeshData, add_group, build_cached
 
 
 def _positive(**values: float) -> None:
@@ -72,12 +72,12 @@ def rectangle(L: float, H: float, size: float, order: int = 2, x0: float = 0.0, 
         bottom, right, top, left = (geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4))
         surface = _structured([bottom, right, top, left], [nx, ny, nx, ny])
         geo.synchronize()
-        _add_group(2, [surface], BODY_TAG, "body")
+        add_group(2, [surface], BODY_TAG, "body")
         for tag, (name, curve) in enumerate(
                 [("left", left), ("right", right), ("bottom", bottom), ("top", top)], start=1):
-            _add_group(1, [curve], tag, name)
+            add_group(1, [curve], tag, name)
 
-    return _build("rectangle", params, construct, comm, cache_dir)
+    return build_cached("rectangle", params, construct, comm, cache_dir)
 
 
 def plate_section(R: float = 10.0, t: float = 2.0, z_support: float = 0.25, size: float = 0.25,
@@ -123,13 +123,13 @@ def plate_section(R: float = 10.0, t: float = 2.0, z_support: float = 0.25, size
         low = _structured([bottom, rim_support, middle, axis_low], [nr, n_low, nr, n_low])
         up = _structured([-middle, rim, top, axis_up], [nr, n_up, nr, n_up])
         geo.synchronize()
-        _add_group(2, [low, up], BODY_TAG, "body")
+        add_group(2, [low, up], BODY_TAG, "body")
         for tag, (name, curves) in enumerate(
                 [("axis", [axis_low, axis_up]), ("bottom", [bottom]), ("top", [top]),
                  ("rim_support", [rim_support]), ("rim", [rim])], start=1):
-            _add_group(1, curves, tag, name)
+            add_group(1, curves, tag, name)
 
-    return _build("plate_section", params, construct, comm, cache_dir)
+    return build_cached("plate_section", params, construct, comm, cache_dir)
 
 
 def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle: float = math.pi / 2,
@@ -176,12 +176,12 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
         xsym, inner = geo.addLine(b_out, b_in), geo.addCircleArc(b_in, centre, a_in)
         surface = _structured([ysym, outer, xsym, inner], [n_r, n_theta, n_r, n_theta])
         geo.synchronize()
-        _add_group(2, [surface], BODY_TAG, "body")
+        add_group(2, [surface], BODY_TAG, "body")
         for tag, (name, curve) in enumerate(
                 [("inner", inner), ("outer", outer), ("xsym", xsym), ("ysym", ysym)], start=1):
-            _add_group(1, [curve], tag, name)
+            add_group(1, [curve], tag, name)
 
-    return _build("annulus_sector", params, construct, comm, cache_dir)
+    return build_cached("annulus_sector", params, construct, comm, cache_dir)
 
 
 def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float, order: int = 2,
@@ -248,13 +248,13 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
         fields.setAsBackgroundMesh(threshold)
         for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
             gmsh.option.setNumber(f"Mesh.{option}", 0)
-        _add_group(2, [surface], BODY_TAG, "body")
+        add_group(2, [surface], BODY_TAG, "body")
         for tag, (name, curves) in enumerate([("top", tops), ("xsym", [xsym]), ("contact", contacts)],
                                              start=1):
             if curves != [None]:
-                _add_group(1, curves, tag, name)
+                add_group(1, curves, tag, name)
 
-    return _build("quarter_disc", params, construct, comm, cache_dir)
+    return build_cached("quarter_disc", params, construct, comm, cache_dir)
 
 
 def necking_bar_grid(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n_r: int = 5,
@@ -329,9 +329,9 @@ def necking_bar(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n
             geo.mesh.setTransfiniteCurve(curve, n_z + 1, "Progression", q)
         geo.mesh.setTransfiniteSurface(body, _ARRANGEMENT, [p[0], p[1], p[2], p[3]])
         geo.synchronize()
-        _add_group(2, [body], BODY_TAG, "body")
+        add_group(2, [body], BODY_TAG, "body")
         for tag, (name, curve) in enumerate(
                 [("axis", axis), ("neck", neck), ("end", end), ("surface", surface)], start=1):
-            _add_group(1, [curve], tag, name)
+            add_group(1, [curve], tag, name)
 
-    return _build("necking_bar", params, construct, comm, cache_dir)
+    return build_cached("necking_bar", params, construct, comm, cache_dir)

@@ -77,18 +77,21 @@ def _cache_path(builder: str, params: dict, cache_dir: str | os.PathLike) -> pat
     return pathlib.Path(cache_dir) / f"{builder}_{digest}.msh"
 
 
-def _add_group(dim: int, entities: list[int], tag: int, name: str) -> None:
+def add_group(dim: int, entities: list[int], tag: int, name: str) -> None:
     """Add the physical group `tag` of dimension `dim` with the given name."""
     gmsh.model.addPhysicalGroup(dim, entities, tag)  # gmsh 4.8: no name argument yet
     gmsh.model.setPhysicalName(dim, tag, name)
 
 
-def _build(builder: str, params: dict, construct: Callable[[], None], comm: MPI.Comm,
-           cache_dir: str | os.PathLike) -> MeshData:
+def build_cached(builder: str, params: dict, construct: Callable[[], None], comm: MPI.Comm,
+                 cache_dir: str | os.PathLike) -> MeshData:
     """Write the mesh on rank 0 unless its cache file exists, then read it on every rank.
 
     `construct` creates the geometry, the physical groups and the mesh-size settings of the current
-    gmsh model (and synchronizes); this function meshes it, raises its order and writes the file.
+    gmsh model (and synchronizes); this function meshes it, raises its order (``params["order"]``)
+    and writes the file under a temporary name, renamed into place. A gmsh failure on rank 0 is
+    raised on every rank (MeshError). The builders of this package and the verification cases'
+    meshes use it.
     """
     path = _cache_path(builder, params, cache_dir)
     error = None

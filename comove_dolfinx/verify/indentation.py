@@ -58,43 +58,32 @@ def hertz_force(d: float) -> float:
     return 4.0 / 3.0 * ES * math.sqrt(R) * d ** 1.5
 
 
-def _mesh(path: pathlib.Path, grading: float, comm):
+def _mesh(cache_dir: pathlib.Path, grading: float, comm):
     """The block [0, W] x [0, H] (r, z), triangles of size grading x the distance to (0, H), at least
     a tenth of the elastic stage's contact radius; facet groups axis, bottom, right, top."""
-    from ..geometry import gmsh_session       # on every rank: its import initialises PETSc (collective)
-    if comm.rank == 0 and not path.exists():
-        gmsh = gmsh_session.gmsh
-        gmsh_session.start()
-        try:
-            geo = gmsh.model.geo
-            p = [geo.addPoint(x, y, 0) for x, y in [(0, 0), (W, 0), (W, H), (0, H)]]
-            bottom, right, top, axis = (geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4))
-            surface = geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, axis])])
-            geo.synchronize()
-            hmin = 0.1 * math.sqrt(R * D_ELASTIC)
-            field = gmsh.model.mesh.field
-            f = field.add("MathEval")
-            field.setString(f, "F", f"min(max({hmin}, {grading} * sqrt(x^2 + (y - {H})^2)), 0.25)")
-            field.setAsBackgroundMesh(f)
-            for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
-                gmsh.option.setNumber(f"Mesh.{option}", 0)
-            gmsh.model.addPhysicalGroup(2, [surface], 1)
-            gmsh.model.setPhysicalName(2, 1, "body")
-            for tag, (name, curve) in enumerate([("axis", axis), ("bottom", bottom), ("right", right),
-                                                 ("top", top)], start=1):
-                gmsh.model.addPhysicalGroup(1, [curve], tag)
-                gmsh.model.setPhysicalName(1, tag, name)
-            gmsh.model.mesh.generate(2)
-            gmsh.model.mesh.setOrder(2)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp.msh")
-            gmsh.write(str(tmp))
-            tmp.rename(path)
-        finally:
-            gmsh_session.stop()
-    comm.barrier()
-    import comove_dolfinx as cm
-    return cm.load_msh(path, comm, required=("axis", "bottom", "top"))
+    from ..geometry.gmsh_session import gmsh
+    from ..geometry.meshes import BODY_TAG, add_group, build_cached
+
+    def construct() -> None:
+        geo = gmsh.model.geo
+        p = [geo.addPoint(x, y, 0) for x, y in [(0, 0), (W, 0), (W, H), (0, H)]]
+        bottom, right, top, axis = (geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4))
+        surface = geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, axis])])
+        geo.synchronize()
+        hmin = 0.1 * math.sqrt(R * D_ELASTIC)
+        field = gmsh.model.mesh.field
+        f = field.add("MathEval")
+        field.setString(f, "F", f"min(max({hmin}, {grading} * sqrt(x^2 + (y - {H})^2)), 0.25)")
+        field.setAsBackgroundMesh(f)
+        for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+            gmsh.option.setNumber(f"Mesh.{option}", 0)
+        add_group(2, [surface], BODY_TAG, "body")
+        for tag, (name, curve) in enumerate([("axis", axis), ("bottom", bottom), ("right", right),
+                                             ("top", top)], start=1):
+            add_group(1, [curve], tag, name)
+
+    params = dict(W=W, H=H, R=R, grading=float(grading), order=2)
+    return build_cached("indentation_block", params, construct, comm, cache_dir)
 
 
 def run(out: pathlib.Path, small: bool = False) -> list[Check]:
@@ -103,7 +92,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     out = pathlib.Path(out)
     grading = 0.2 if small else 0.1
     tol_hertz = 0.04 if small else 0.02
-    mesh = _mesh(out / "meshes" / f"indentation_{grading:g}.msh", grading, comm)
+    mesh = _mesh(out / "meshes", grading, comm)
     body = cm.Body(mesh, "axisymmetric", cm.J2(E, NU, cm.Hardening.perfect(Y)))
     sphere = cm.Circle((0.0, H + R), R, motion=(0.0, -D_MAX))
     contact = cm.Contact("top", sphere, method="nitsche", gamma0=10.0)

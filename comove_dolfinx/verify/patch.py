@@ -40,59 +40,49 @@ L, H, E, NU, P = 2.0, 1.0, 1000.0, 0.3, 20.0
 TOL = 1e-8
 
 
-def _mesh(path: pathlib.Path, strip: bool, size: float, comm):
-    """The block meshed by gmsh (rank 0) into ``path``: unstructured triangles whose size varies from
-    corner to corner; with ``strip``, one structured row of congruent triangles along the bottom."""
-    from ..geometry import gmsh_session       # on every rank: its import initialises PETSc (collective)
-    if comm.rank == 0 and not path.exists():
-        gmsh = gmsh_session.gmsh
-        gmsh_session.start()
-        try:
-            geo = gmsh.model.geo
-            t = size if strip else 0.0
-            sizes = [0.45 * size, 1.6 * size, 0.7 * size, 1.3 * size]    # irregular on purpose
-            if strip:
-                sizes[:2] = [size, size]
-            corners = [(0, 0), (L, 0), (L, H), (0, H)]
-            p = [geo.addPoint(x, y, 0, s) for (x, y), s in zip(corners, sizes)]
-            bottom = geo.addLine(p[0], p[1])
-            top, left_up = geo.addLine(p[2], p[3]), None
-            surfaces = []
-            if strip:
-                q = [geo.addPoint(L, t, 0, size), geo.addPoint(0, t, 0, size)]
-                right_low, mid, left_low = geo.addLine(p[1], q[0]), geo.addLine(q[0], q[1]), geo.addLine(q[1], p[0])
-                right_up, left_up = geo.addLine(q[0], p[2]), geo.addLine(p[3], q[1])
-                low = geo.addPlaneSurface([geo.addCurveLoop([bottom, right_low, mid, left_low])])
-                n = int(round(L / size))
-                for c, k in ((bottom, n), (mid, n), (right_low, 1), (left_low, 1)):
-                    geo.mesh.setTransfiniteCurve(c, k + 1)
-                geo.mesh.setTransfiniteSurface(low, "AlternateLeft")
-                up = geo.addPlaneSurface([geo.addCurveLoop([-mid, right_up, top, left_up])])
-                surfaces = [low, up]
-                rights, lefts = [right_low, right_up], [left_low, left_up]
-            else:
-                right, left = geo.addLine(p[1], p[2]), geo.addLine(p[3], p[0])
-                surfaces = [geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, left])])]
-                rights, lefts = [right], [left]
-            geo.synchronize()
-            gmsh.model.addPhysicalGroup(2, surfaces, 1)
-            gmsh.model.setPhysicalName(2, 1, "body")
-            for tag, (name, curves) in enumerate([("left", lefts), ("right", rights), ("bottom", [bottom]),
-                                                  ("top", [top])], start=1):
-                gmsh.model.addPhysicalGroup(1, curves, tag)
-                gmsh.model.setPhysicalName(1, tag, name)
-            gmsh.option.setNumber("Mesh.Algorithm", 5)
-            gmsh.model.mesh.generate(2)
-            gmsh.model.mesh.setOrder(2)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp.msh")
-            gmsh.write(str(tmp))
-            tmp.rename(path)
-        finally:
-            gmsh_session.stop()
-    comm.barrier()
-    import comove_dolfinx as cm
-    return cm.load_msh(path, comm, required=("left", "right", "bottom", "top"))
+def _mesh(cache_dir: pathlib.Path, strip: bool, size: float, comm):
+    """The block meshed by gmsh: unstructured triangles whose size varies from corner to corner;
+    with ``strip``, one structured row of congruent triangles along the bottom. Facet groups left,
+    right, bottom, top."""
+    from ..geometry.gmsh_session import gmsh
+    from ..geometry.meshes import BODY_TAG, add_group, build_cached
+
+    def construct() -> None:
+        geo = gmsh.model.geo
+        t = size if strip else 0.0
+        sizes = [0.45 * size, 1.6 * size, 0.7 * size, 1.3 * size]    # irregular on purpose
+        if strip:
+            sizes[:2] = [size, size]
+        corners = [(0, 0), (L, 0), (L, H), (0, H)]
+        p = [geo.addPoint(x, y, 0, s) for (x, y), s in zip(corners, sizes)]
+        bottom = geo.addLine(p[0], p[1])
+        top, left_up = geo.addLine(p[2], p[3]), None
+        surfaces = []
+        if strip:
+            q = [geo.addPoint(L, t, 0, size), geo.addPoint(0, t, 0, size)]
+            right_low, mid, left_low = geo.addLine(p[1], q[0]), geo.addLine(q[0], q[1]), geo.addLine(q[1], p[0])
+            right_up, left_up = geo.addLine(q[0], p[2]), geo.addLine(p[3], q[1])
+            low = geo.addPlaneSurface([geo.addCurveLoop([bottom, right_low, mid, left_low])])
+            n = int(round(L / size))
+            for c, k in ((bottom, n), (mid, n), (right_low, 1), (left_low, 1)):
+                geo.mesh.setTransfiniteCurve(c, k + 1)
+            geo.mesh.setTransfiniteSurface(low, "AlternateLeft")
+            up = geo.addPlaneSurface([geo.addCurveLoop([-mid, right_up, top, left_up])])
+            surfaces = [low, up]
+            rights, lefts = [right_low, right_up], [left_low, left_up]
+        else:
+            right, left = geo.addLine(p[1], p[2]), geo.addLine(p[3], p[0])
+            surfaces = [geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, left])])]
+            rights, lefts = [right], [left]
+        geo.synchronize()
+        add_group(2, surfaces, BODY_TAG, "body")
+        for tag, (name, curves) in enumerate([("left", lefts), ("right", rights), ("bottom", [bottom]),
+                                              ("top", [top])], start=1):
+            add_group(1, curves, tag, name)
+        gmsh.option.setNumber("Mesh.Algorithm", 5)
+
+    params = dict(L=L, H=H, size=float(size), strip=bool(strip), order=2)
+    return build_cached("patch_block", params, construct, comm, cache_dir)
 
 
 def _press(mesh, method: str, comm):
@@ -125,7 +115,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     comm = MPI.COMM_WORLD
     out = pathlib.Path(out)
     size = 0.25 if small else 0.1
-    meshes = {strip: _mesh(out / "meshes" / f"patch_{'strip' if strip else 'free'}_{size:g}.msh", strip, size, comm)
+    meshes = {strip: _mesh(out / "meshes", strip, size, comm)
               for strip in (False, True)}
     runs = [("nitsche", False, True), ("penalty", True, True), ("penalty", False, False)]
     checks, curves = [], []
