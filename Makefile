@@ -65,19 +65,24 @@ STAMP   := $(VENV)/.installed-$(SOURCE)
 
 all: demo
 
-# Installs the Debian packages that are missing (apt-get as root, sudo otherwise).
+# $(call apt_missing,PACKAGES): a shell command that installs those of the Debian PACKAGES that are
+# missing (apt-get as root, sudo otherwise)
+define apt_missing
+missing=""; for p in $(1); do \
+  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+done; \
+if [ -n "$$missing" ]; then \
+  echo "installing Debian packages:$$missing"; \
+  $(SUDO) apt-get update -qq && \
+  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+fi
+endef
+
+# Installs the Debian packages that are missing.
 system:
-	@pkgs="$(if $(filter apt,$(SOURCE)),$(APT_PKGS),$(PIP_APT_PKGS))"; \
-	if ! command -v dpkg-query >/dev/null; then \
+	@if ! command -v dpkg-query >/dev/null; then \
 	  echo "not a Debian system: make sure a C compiler is installed (the forms are compiled)"; exit 0; fi; \
-	missing=""; for p in $$pkgs; do \
-	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
-	done; \
-	if [ -n "$$missing" ]; then \
-	  echo "installing Debian packages:$$missing"; \
-	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
-	fi
+	$(call apt_missing,$(if $(filter apt,$(SOURCE)),$(APT_PKGS),$(PIP_APT_PKGS)))
 
 # The venv and the editable install. apt: never pulls numpy, gmsh, mpi4py, petsc4py or FEniCS from
 # PyPI. pip: everything from PyPI, nothing from the system.
@@ -139,14 +144,7 @@ docs:
 	$(OS_ID) with DOLFINX=$(SOURCE)"; fi
 
 docs-site: venv
-	@missing=""; for p in $(DOCS_APT_PKGS); do \
-	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
-	done; \
-	if [ -n "$$missing" ]; then \
-	  echo "installing Debian packages:$$missing"; \
-	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
-	fi
+	@$(call apt_missing,$(DOCS_APT_PKGS))
 	@$(PY) -c "import jupytext" 2>/dev/null || $(PY) -m pip install -q $(DOCS_PIP_PKGS)
 	$(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
