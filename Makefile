@@ -4,7 +4,7 @@
 #   make study  speed against accuracy across methods (results/study/); make stability, make cost
 #   make docs   the documentation site (docs/_build/html; Debian 12 with its packages)
 #
-# Where dolfinx comes from (DOLFINX=auto|apt|pip; README, Platforms):
+# Where dolfinx comes from (DOLFINX=auto|apt|pip; docs/install.md):
 #   apt   Debian's packages: Debian 12 has dolfinx 0.5.2, Debian 13 has 0.9. They serve
 #         /usr/bin/python3 only, so the venv is made from it with --system-site-packages.
 #   pip   the PyPI wheel dolfinx-solver-real (the current release, 0.11, with PETSc, MUMPS and MPICH
@@ -50,7 +50,7 @@ export OMPI_ALLOW_RUN_AS_ROOT_CONFIRM := 1
 export OMPI_MCA_rmaps_base_oversubscribe := 1
 export PRTE_MCA_rmaps_default_mapping_policy := :oversubscribe
 # one thread per process (OpenBLAS, and the OpenMP runtime that Debian's PETSc links): ranks, not
-# threads, share the cores (README, Parallel runs)
+# threads, share the cores (docs/parallel.md)
 export OPENBLAS_NUM_THREADS := 1
 export OMP_NUM_THREADS := 1
 export MPLBACKEND := Agg

@@ -37,7 +37,7 @@ def check_version() -> None:
     if LEVEL not in SUPPORTED:
         raise SystemExit(f"comove_dolfinx is tested with dolfinx {', '.join(SUPPORTED)} (Debian 12, "
                          f"Debian 13, the current PyPI release); found {dolfinx.__version__}. "
-                         "Install one of these (see README, Platforms).")
+                         "Install one of these (see docs/install.md).")
 
 
 # ------------------------------------------------------------------------------------------------

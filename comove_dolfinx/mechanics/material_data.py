@@ -1,8 +1,8 @@
-"""Material data and the tensor storage shared by the material laws of :mod:`comove_dolfinx.materials`.
+"""Material data and the tensor storage shared by the material laws of :mod:`comove_dolfinx.mechanics.materials`.
 
 Stored tensors are arrays (N, 4) of the components (xx, yy, zz, xy): zz is out of plane (the hoop component
 in axisymmetry) and the shear is the tensor component, so a:b = a_xx b_xx + a_yy b_yy + a_zz b_zz + 2 a_xy b_xy
-(see :mod:`comove_dolfinx.materials` for the full convention). Stresses are in the units of E, tension
+(see :mod:`comove_dolfinx.mechanics.materials` for the full convention). Stresses are in the units of E, tension
 positive; plastic strains are equivalent (von Mises) plastic strains. Pure NumPy, vectorised over points.
 """
 

@@ -16,7 +16,7 @@ Models: "plane_strain" and "axisymmetric" apply the three-dimensional law to the
 
 Units: stresses in the units of E; strains are dimensionless; tension is positive. p is the equivalent
 (von Mises) plastic strain, with sigma_eq dp = sigma : deps_p. Pure NumPy, vectorised over the points; the
-material data (:class:`Elastic`, :class:`Hardening`) live in :mod:`comove_dolfinx.material_data` and are
+material data (:class:`Elastic`, :class:`Hardening`) live in :mod:`comove_dolfinx.mechanics.material_data` and are
 re-exported here.
 """
 

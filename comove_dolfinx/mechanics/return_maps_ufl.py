@@ -1,4 +1,4 @@
-"""The material laws of :mod:`comove_dolfinx.materials` written in UFL, for facet integrals.
+"""The material laws of :mod:`comove_dolfinx.mechanics.materials` written in UFL, for facet integrals.
 
 Quadrature-point state cannot be seen on facets (dolfinx evaluates no quadrature function there), so
 a term on the boundary that needs the stress of an elastic-plastic body (Nitsche contact) evaluates

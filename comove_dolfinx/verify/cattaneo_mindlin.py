@@ -27,8 +27,9 @@ increment whose Q / (mu P) is nearest 0.5 is compared: the stick zone's half-wid
 reference length of the contact that sticks, at the facet quadrature points, four per facet: a
 resolution of about 3 % of c with ``small``) against a sqrt(1 - Q / (mu P)) with the measured contact
 half-width a (half the contact extent), and a against Hertz's a = sqrt(4 P R / (pi E*)), E* = E /
-(1 - nu^2); both within 5 %. Measured (2026-11-28, dolfinx 0.5.2, one process): c 2.2 % and a 1.3 %
-off (124 Newton iterations, 4.6 s CPU), with ``small`` 4.5 % and 2.6 % (109, 1.3 s). Lengths and forces per unit
+(1 - nu^2); both within 5 %. Measured (``comove verify cattaneo_mindlin``, 2026-11-28, dolfinx 0.5.2, one
+process): c 1.1 % and a 0.6 % off (80 Newton iterations, 3.0 s CPU), with ``small`` 1.7 % and 0.3 % (63,
+0.8 s). Lengths and forces per unit
 thickness in the user's units; Q is the friction force along x on the body, P the normal force.
 """
 from __future__ import annotations
