@@ -58,7 +58,7 @@ from .solver import IncrementalSolver, Timer
 from .solver import linear
 from .solver.linear import make_solver, pushed
 from .solver.newton import Newton
-from .tables import read_table, write_table
+from .io.csv_tables import read_table, write_table
 
 COMM = MPI.COMM_WORLD
 RING_SIZES = (0.22, 0.115, 0.058, 0.0365)          # about 1.4k, 5k, 20k and 50k dofs

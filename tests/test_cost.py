@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from comove_dolfinx import cost
-from comove_dolfinx.tables import read_table
+from comove_dolfinx.io.csv_tables import read_table
 
 
 def test_the_floor_solves_the_elastic_system_it_assembles():
