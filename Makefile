@@ -124,11 +124,11 @@ stability: venv
 	$(PY) -m comove_dolfinx.stability all --out results/stability
 
 cost: venv
-	$(PY) -m comove_dolfinx.cost floor --out results/cost
-	$(PY) -m comove_dolfinx.cost solvers --out results/cost
-	$(PY) -m comove_dolfinx.cost scale --out results/cost
-	$(MPIRUN) $(PY) -m comove_dolfinx.cost scale --out results/cost
-	$(PY) -m comove_dolfinx.cost slopes --out results/cost
+	$(PY) -m comove_dolfinx.benchmarks floor --out results/cost
+	$(PY) -m comove_dolfinx.benchmarks solvers --out results/cost
+	$(PY) -m comove_dolfinx.benchmarks scale --out results/cost
+	$(MPIRUN) $(PY) -m comove_dolfinx.benchmarks scale --out results/cost
+	$(PY) -m comove_dolfinx.benchmarks slopes --out results/cost
 
 # The documentation site: Sphinx with MyST (the Markdown pages of docs/), autodoc and napoleon (the API
 # reference from the numpy-style docstrings), and each demo run once and shown as a page with its

@@ -32,7 +32,7 @@ from mpi4py import MPI
 from tqdm import tqdm
 
 from .mechanics.model import Model
-from .names import PREDICTORS, first_increment_error
+from .choices import PREDICTORS, first_increment_error
 from .parallel import Interrupts, collective
 from .solver import (
     Increment,

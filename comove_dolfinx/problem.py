@@ -49,7 +49,7 @@ import math
 import pathlib
 import tomllib
 
-from .names import first_increment_error
+from .choices import first_increment_error
 
 
 class ProblemError(ValueError):

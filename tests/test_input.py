@@ -80,13 +80,13 @@ def test_scenes_listing(capsys):
 
 
 def test_the_names_checked_early_are_those_implemented():
-    """Scene parameters are checked against comove_dolfinx.names before dolfinx is loaded; the
+    """Scene parameters are checked against comove_dolfinx.choices before dolfinx is loaded; the
     modules that implement the choices must offer exactly those names."""
-    from comove_dolfinx import names
+    from comove_dolfinx import choices
     from comove_dolfinx.mechanics import kinematics, materials, updates
-    assert set(updates.UPDATES) == set(names.UPDATES)
-    assert set(materials.LAWS) == set(names.LAWS)
-    assert set(kinematics.MODELS) == set(names.MODELS)
+    assert set(updates.UPDATES) == set(choices.UPDATES)
+    assert set(materials.LAWS) == set(choices.LAWS)
+    assert set(kinematics.MODELS) == set(choices.MODELS)
 
 
 BAD_EARLY = [("ring", "E=-1", "E = -1.0"), ("ring", "size=inf", "size = inf"), ("beam", "L=inf", "L = inf"),

@@ -37,7 +37,7 @@ def test_pareto_front_keeps_the_undominated_runs():
 
 def test_quantity_is_interpolated_at_the_load_level_or_read_at_the_end(tmp_path):
     """q read off a history file as the study reads it (led by the unloaded state)."""
-    from comove_dolfinx.tables import read_history, write_table
+    from comove_dolfinx.io.csv_tables import read_history, write_table
     write_table(tmp_path / "h.csv", [{"load": 0.5, "force": 10.0}, {"load": 1.5, "force": 30.0}])
     hist = read_history(tmp_path / "h.csv", origin=True)
     ring = ScenePlan("x", "force", 1.0, "P")

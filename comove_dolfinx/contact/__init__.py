@@ -1,5 +1,5 @@
 """Unilateral contact with rigid obstacles, penalty or Nitsche, with lagged Coulomb friction."""
-from ..names import CONTACT_METHODS as METHODS
+from ..choices import CONTACT_METHODS as METHODS
 from .item import FACET_DEGREE, Contact, ZoneInfo
 from .obstacles import Circle, ContactError, Obstacle, Plane, Profile
 

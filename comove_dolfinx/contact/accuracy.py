@@ -85,7 +85,7 @@ def main(argv=None) -> None:
                           f"{100 * r['err_edge']:+.2f} | {100 * r['err_length']:+.2f} | {100 * r['err_peak']:+.2f} | "
                           f"{100 * r['err_support']:+.2f} | {r['cpu_s']:.1f} |", flush=True)
     if comm.rank == 0:
-        from ..tables import write_table
+        from ..io.csv_tables import write_table
         write_table(args.out / "hertz_accuracy.csv", rows)
 
 

@@ -38,8 +38,8 @@ from petsc4py import PETSc
 
 from .. import compat
 from ..loads import Item
-from ..names import CONTACT_METHODS as METHODS
-from ..names import FRICTION_LAWS
+from ..choices import CONTACT_METHODS as METHODS
+from ..choices import FRICTION_LAWS
 from . import laws
 from .obstacles import ContactError, Obstacle
 from .outputs import ContactOutputs

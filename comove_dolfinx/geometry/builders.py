@@ -184,6 +184,44 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
     return build_cached("annulus_sector", params, construct, comm, cache_dir)
 
 
+def _disc_outline(R: float, size: float, half: bool) -> tuple:
+    """The geometry of :func:`quarter_disc` (not synchronized): (the point at the origin, the surface,
+    the top curves, the contact arcs, the curve on x = 0 or None for the half disc)."""
+    geo = gmsh.model.geo
+    origin, centre, corner = (geo.addPoint(x, y, 0.0, size) for x, y in [(0, 0), (0, R), (R, R)])
+    top = geo.addLine(centre, corner)
+    contact = geo.addCircleArc(corner, centre, origin)
+    if half:
+        left = geo.addPoint(-R, R, 0.0, size)
+        top_left, contact_left = geo.addLine(left, centre), geo.addCircleArc(origin, centre, left)
+        loop = [top_left, top, contact, contact_left]
+        tops, contacts, xsym = [top_left, top], [contact, contact_left], None
+    else:
+        xsym = geo.addLine(origin, centre)
+        loop, tops, contacts = [xsym, top, contact], [top], [contact]
+    surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
+    return origin, surface, tops, contacts, xsym
+
+
+def _refine_towards(point: int, size: float, size_contact: float, contact_zone: float,
+                    growth: float) -> None:
+    """Element size ``size_contact`` within ``contact_zone`` of the gmsh ``point``, growing linearly
+    by ``growth`` per unit distance to ``size`` beyond (the background field of the current model,
+    which alone sets the sizes)."""
+    fields = gmsh.model.mesh.field
+    distance = fields.add("Distance")
+    fields.setNumbers(distance, "PointsList", [point])
+    threshold = fields.add("Threshold")
+    fields.setNumber(threshold, "InField", distance)
+    fields.setNumber(threshold, "SizeMin", size_contact)
+    fields.setNumber(threshold, "SizeMax", size)
+    fields.setNumber(threshold, "DistMin", contact_zone)
+    fields.setNumber(threshold, "DistMax", contact_zone + (size - size_contact) / growth)
+    fields.setAsBackgroundMesh(threshold)
+    for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+        gmsh.option.setNumber(f"Mesh.{option}", 0)
+
+
 def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float, order: int = 2,
                  growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
                  cache_dir: str | os.PathLike = "meshes", half: bool = False) -> MeshData:
@@ -222,32 +260,9 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
         params["half"] = True
 
     def construct() -> None:
-        geo = gmsh.model.geo
-        origin, centre, corner = (geo.addPoint(x, y, 0.0, size) for x, y in [(0, 0), (0, R), (R, R)])
-        top = geo.addLine(centre, corner)
-        contact = geo.addCircleArc(corner, centre, origin)
-        if half:
-            left = geo.addPoint(-R, R, 0.0, size)
-            top_left, contact_left = geo.addLine(left, centre), geo.addCircleArc(origin, centre, left)
-            loop = [top_left, top, contact, contact_left]
-            tops, contacts, xsym = [top_left, top], [contact, contact_left], None
-        else:
-            xsym = geo.addLine(origin, centre)
-            loop, tops, contacts = [xsym, top, contact], [top], [contact]
-        surface = geo.addPlaneSurface([geo.addCurveLoop(loop)])
-        geo.synchronize()
-        fields = gmsh.model.mesh.field
-        distance = fields.add("Distance")
-        fields.setNumbers(distance, "PointsList", [origin])
-        threshold = fields.add("Threshold")
-        fields.setNumber(threshold, "InField", distance)
-        fields.setNumber(threshold, "SizeMin", size_contact)
-        fields.setNumber(threshold, "SizeMax", size)
-        fields.setNumber(threshold, "DistMin", contact_zone)
-        fields.setNumber(threshold, "DistMax", contact_zone + (size - size_contact) / growth)
-        fields.setAsBackgroundMesh(threshold)
-        for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
-            gmsh.option.setNumber(f"Mesh.{option}", 0)
+        origin, surface, tops, contacts, xsym = _disc_outline(R, size, half)
+        gmsh.model.geo.synchronize()
+        _refine_towards(origin, size, size_contact, contact_zone, growth)
         add_group(2, [surface], BODY_TAG, "body")
         for tag, (name, curves) in enumerate([("top", tops), ("xsym", [xsym]), ("contact", contacts)],
                                              start=1):
@@ -263,11 +278,45 @@ def necking_bar_grid(R: float = 6.413, L: float = 53.334, reduction: float = 0.0
     ((n_z + 1) x (n_r + 1)), r_ij = (i / n_r) R(z_j), R(z) the tapered radius. The builder's Gmsh mesh
     has these vertices (transfinite interpolation of the same boundary points); an independent code can
     mesh the bar with them."""
-    q = grading ** (1.0 / (n_z - 1)) if n_z > 1 else 1.0
+    q = _progression(grading, n_z)
     j = np.arange(n_z + 1)
     z = 0.5 * L * (j / n_z if q == 1.0 else (q ** j - 1.0) / (q ** n_z - 1.0))
     radius = R * (1.0 - reduction * (1.0 - z / (0.5 * L)))
     return z, radius[:, None] * np.arange(n_r + 1)[None, :] / n_r
+
+
+def _progression(grading: float, n_z: int) -> float:
+    """The ratio of consecutive cell lengths along z of :func:`necking_bar` with ``grading``."""
+    return grading ** (1.0 / (n_z - 1)) if n_z > 1 else 1.0
+
+
+def _check_necking_bar(n_r, n_z, reduction, grading) -> None:
+    """ValueError unless the cell counts are integers >= 1, 0 <= reduction < 1 and grading >= 1."""
+    for name, n in (("n_r", n_r), ("n_z", n_z)):
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
+    if not (isinstance(reduction, (int, float, np.number)) and 0.0 <= reduction < 1.0):
+        raise ValueError(f"reduction must be a number in [0, 1), got {reduction!r}")
+    if grading < 1.0:
+        raise ValueError(f"grading must be >= 1 (cells longest at the end), got {grading!r}")
+
+
+def _necking_bar_outline(R: float, L: float, reduction: float, n_r: int, n_z: int,
+                         grading: float) -> tuple:
+    """The transfinite geometry of :func:`necking_bar` (not synchronized): (the surface, its curves
+    (neck, surface, end, axis), all pointing to +r or +z)."""
+    geo = gmsh.model.geo
+    h, r_neck = 0.5 * L, R * (1.0 - reduction)
+    p = [geo.addPoint(x, y, 0.0) for x, y in [(0.0, 0.0), (r_neck, 0.0), (R, h), (0.0, h)]]
+    neck, surface = geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2])
+    end, axis = geo.addLine(p[3], p[2]), geo.addLine(p[0], p[3])
+    body = geo.addPlaneSurface([geo.addCurveLoop([neck, surface, -end, -axis])])
+    for curve, n in ((neck, n_r), (end, n_r)):
+        geo.mesh.setTransfiniteCurve(curve, n + 1)
+    for curve in (surface, axis):
+        geo.mesh.setTransfiniteCurve(curve, n_z + 1, "Progression", _progression(grading, n_z))
+    geo.mesh.setTransfiniteSurface(body, _ARRANGEMENT, [p[0], p[1], p[2], p[3]])
+    return body, (neck, surface, end, axis)
 
 
 def necking_bar(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n_r: int = 5,
@@ -305,30 +354,13 @@ def necking_bar(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n
     """
     _positive(R=R, L=L, grading=grading)
     order = _check_order(order)
-    for name, n in (("n_r", n_r), ("n_z", n_z)):
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
-    if not (isinstance(reduction, (int, float, np.number)) and 0.0 <= reduction < 1.0):
-        raise ValueError(f"reduction must be a number in [0, 1), got {reduction!r}")
-    if grading < 1.0:
-        raise ValueError(f"grading must be >= 1 (cells longest at the end), got {grading!r}")
+    _check_necking_bar(n_r, n_z, reduction, grading)
     params = dict(R=float(R), L=float(L), reduction=float(reduction), n_r=int(n_r), n_z=int(n_z),
                   grading=float(grading), order=order)
-    q = grading ** (1.0 / (n_z - 1)) if n_z > 1 else 1.0
 
     def construct() -> None:
-        geo = gmsh.model.geo
-        h, r_neck = 0.5 * L, R * (1.0 - reduction)
-        p = [geo.addPoint(x, y, 0.0) for x, y in [(0.0, 0.0), (r_neck, 0.0), (R, h), (0.0, h)]]
-        neck, surface = geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2])
-        end, axis = geo.addLine(p[3], p[2]), geo.addLine(p[0], p[3])       # all pointing to +r or +z
-        body = geo.addPlaneSurface([geo.addCurveLoop([neck, surface, -end, -axis])])
-        for curve, n in ((neck, n_r), (end, n_r)):
-            geo.mesh.setTransfiniteCurve(curve, n + 1)
-        for curve in (surface, axis):
-            geo.mesh.setTransfiniteCurve(curve, n_z + 1, "Progression", q)
-        geo.mesh.setTransfiniteSurface(body, _ARRANGEMENT, [p[0], p[1], p[2], p[3]])
-        geo.synchronize()
+        body, (neck, surface, end, axis) = _necking_bar_outline(R, L, reduction, n_r, n_z, grading)
+        gmsh.model.geo.synchronize()
         add_group(2, [body], BODY_TAG, "body")
         for tag, (name, curve) in enumerate(
                 [("axis", axis), ("neck", neck), ("end", end), ("surface", surface)], start=1):

@@ -11,7 +11,6 @@ import numpy as np
 from tqdm import tqdm
 
 from ..parallel import on_root
-from ..tables import read_history  # noqa: F401 - exported by comove_dolfinx.io
 
 
 class Writer:

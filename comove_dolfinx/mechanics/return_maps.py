@@ -181,9 +181,10 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     f1 = 1 / (1 + c1 dgamma), c1 = E / (3 (1 - nu)), and xx - yy and xy by f2 = 1 / (1 + 2 G dgamma), so
     sigma_eq^2 = A f1^2 + B f2^2 with A = (xx + yy)^2 / 4, B = 3 (xx - yy)^2 / 4 + 3 xy^2 of the trial
     stress, and dp = 2/3 dgamma sigma_eq. The segment of the table is found in closed form, then
-    sigma_eq = sigma_y(p_n + dp) is solved by a bracketed Newton iteration on that (smooth) segment;
-    a saturation term V(p) of the hardening enters as phi(g) = sigma_eq (1 - 2/3 H g) - Y0 - V(p), still
-    decreasing in g, since p grows with g.
+    sigma_eq = sigma_y(p_n + dp) is solved by a bracketed Newton iteration on that (smooth) segment
+    (:func:`_plane_stress_dgamma`); a saturation term V(p) of the hardening enters as
+    phi(g) = sigma_eq (1 - 2/3 H g) - Y0 - V(p), still decreasing in g, since p grows with g. The
+    stress and its derivative follow from dgamma (:func:`_plane_stress_state`).
     """
     E, nu, G = elastic.E, elastic.nu, elastic.mu
     c1, c2 = E / (3.0 * (1.0 - nu)), 2.0 * G
@@ -202,6 +203,18 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     seg = _plane_stress_segment(A, B, pn, c1, c2, hardening)
     H = h0[seg]
     Y0 = s0[seg] + H * (pn - p0[seg])      # the segment's straight line evaluated at p_n
+    g = _plane_stress_dgamma(A, B, q, y_n, pn, H, Y0, c1, c2, hardening)
+    out, p_i, Di = _plane_stress_state(a, b, t, A, B, pn, H, g, c1, c2, hardening)
+    sig[i] = out
+    p[i] = p_i
+    return PointsReturn(sig, p, i, Di, g[:, None] * deviator(out))
+
+
+def _plane_stress_dgamma(A, B, q, y_n, pn, H, Y0, c1, c2, hardening):
+    """dgamma of the yielding points: the root of phi(g) = sigma_eq(g) (1 - 2/3 H g) - Y0 (- V(p)
+    with a saturation term), strictly decreasing, bracketed by [0, (q / sigma_y(p_n) - 1) / c1];
+    Newton's step where it stays inside the bracket, bisection where not, each point until its step
+    is below round-off (RuntimeError after 200 iterations)."""
     # phi(g) = sigma_eq(g) (1 - 2/3 H g) - Y0, strictly decreasing, root bracketed by [0, g_hi]
     lo, hi = np.zeros_like(q), (q / y_n - 1.0) / c1
     c = (c1 * A + c2 * B) / (A + B)
@@ -227,9 +240,13 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
         g[act] = new
         act = act[np.abs(new - ga) > 1e-13 * new + 1e-15 / c1]     # relative, or round-off of c1 g
         if act.size == 0:
-            break
-    else:
-        raise RuntimeError("plane-stress return mapping did not converge")
+            return g
+    raise RuntimeError("plane-stress return mapping did not converge")
+
+
+def _plane_stress_state(a, b, t, A, B, pn, H, g, c1, c2, hardening):
+    """The yielding points' state at dgamma ``g``: the stress (k, 4) from the trial's sum ``a``,
+    difference ``b`` and shear ``t``, the plastic strain p (k,), and d sig / d sig_tr (k, 4, 4)."""
     f1, f2 = 1.0 / (1.0 + c1 * g), 1.0 / (1.0 + c2 * g)
     se = np.sqrt(A * f1 ** 2 + B * f2 ** 2)
     dse = -(c1 * A * f1 ** 3 + c2 * B * f2 ** 3) / se
@@ -243,8 +260,6 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     out[:, 0] = 0.5 * (a * f1 + b * f2)
     out[:, 1] = 0.5 * (a * f1 - b * f2)
     out[:, 3] = t * f2
-    sig[i] = out
-    p[i] = pn + 2.0 / 3.0 * g * se
     # D = M(g) + (d sig / d g) (x) (d g / d sig_tr), d g / d sig_tr = -(d phi / d sig_tr) / phi'
     Di = np.zeros((len(g), 4, 4))
     Di[:, 0, 0] = Di[:, 1, 1] = 0.5 * (f1 + f2)
@@ -256,7 +271,7 @@ def _j2_plane_stress(sig_tr, p_n, elastic, hardening):
     dB = np.stack([1.5 * b, -1.5 * b, np.zeros_like(g), 6.0 * t], axis=1)
     dphi_dsig = (w / (2.0 * se))[:, None] * (f1[:, None] ** 2 * dA + f2[:, None] ** 2 * dB)
     Di += dsig_dg[:, :, None] * (-dphi_dsig / dphi[:, None])[:, None, :]
-    return PointsReturn(sig, p, i, Di, g[:, None] * deviator(out))
+    return out, pn + 2.0 / 3.0 * g * se, Di
 
 
 def chen_loading_surface(elastic: Elastic, hardening: Hardening) -> Hardening:

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from ..mechanics.material_data import Elastic
-from ..names import CONTACT_METHODS as METHODS
-from ..names import FRICTION_LAWS, PREDICTORS, UPDATES, first_increment_error
+from ..choices import CONTACT_METHODS as METHODS
+from ..choices import FRICTION_LAWS, PREDICTORS, UPDATES, first_increment_error
 
 # dolfinx, gmsh and the rest are imported by the methods that build: checking parameters stays light
 

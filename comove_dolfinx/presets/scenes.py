@@ -5,7 +5,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from ..mechanics.material_data import Hardening, MaterialError
-from ..names import LAWS, PLASTIC_UPDATES
+from ..choices import LAWS, PLASTIC_UPDATES
 from .base import ContactScene, Scene, SceneError
 
 # What builds a scene (dolfinx, gmsh, UFL) is imported by the methods that build (`from .build

@@ -46,7 +46,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from ..mechanics.model import Model
-from ..names import first_increment_error
+from ..choices import first_increment_error
 from ..parallel import collective
 from . import failures
 from .newton import Newton, NewtonSettings, Timer

@@ -123,7 +123,7 @@ def run_friction(out) -> list[dict]:
 
 def _write_detail(out, rows):
     """Per run: Newton iterations per increment while pressing and while sliding, and Q / (mu P)."""
-    from ..tables import write_table
+    from ..io.csv_tables import write_table
     fields = ["panel", "method", "column", "status", "cutbacks", "press_its", "slide_its", "newton_its",
               "Q_over_muP", "cpu_s"]
     write_table(out / "friction_detail.csv",

@@ -5,7 +5,7 @@ import dataclasses
 import math
 import pathlib
 
-from ..tables import read_table, write_table
+from ..io.csv_tables import read_table, write_table
 from .causes import SHORT
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import pathlib
 
-from ..tables import read_table, write_table
+from ..io.csv_tables import read_table, write_table
 from .plan import ScenePlan
 
 NAN = float("nan")

@@ -19,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..tables import read_history
+from ..io.csv_tables import read_history
 from .plan import Case, ScenePlan
 
 
@@ -49,7 +49,7 @@ def _read(folder: pathlib.Path) -> tuple[dict, dict]:
 
 
 def quantity(plan: ScenePlan, history: dict) -> float:
-    """q of a run from its history's columns (led by the unloaded state, tables.read_history with
+    """q of a run from its history's columns (led by the unloaded state, csv_tables.read_history with
     ``origin``): the column at the plan's load level (linear between increments), nan where the run
     did not get there; or in the last row (the caller keeps it for completed runs only)."""
     if len(history.get("load", ())) < 2:

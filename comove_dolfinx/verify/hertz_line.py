@@ -99,7 +99,7 @@ def _series_table(out, rows, comm):
     """out/hertz_line_series.csv and .md: the convergence series."""
     if comm.rank != 0:
         return
-    from ..tables import write_table
+    from ..io.csv_tables import write_table
     keys = ("update", "hc", "dofs", "P", "a_hertz", "a", "p0_hertz", "p0", "profile_rms", "newton_its", "cpu_s")
     table = [{k: r[k] for k in keys} | {"a_error": r["a"] / r["a_hertz"] - 1, "p0_error": r["p0"] / r["p0_hertz"] - 1}
              for r in rows]

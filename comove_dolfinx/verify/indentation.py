@@ -120,7 +120,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
               TABOR_TOL, its, cpu),
     ]
     if comm.rank == 0:
-        from ..tables import write_table
+        from ..io.csv_tables import write_table
         write_table(out / f"{NAME}_history.csv",
                     [{"d": di, "P": Pi, "a": ai, "p_m/Y": pmi / Y, "E*a/(RY)": ES * ai / (R * Y),
                       "max_plastic_strain": e, "newton_its": n}

@@ -15,11 +15,13 @@ References:
 
 * CalculiX (ccx 2.20, Debian 12), our own deck of the same structured grid (cm.necking_bar_grid,
   5 x 40 cells) with CAX8R elements (eight nodes, reduced integration), NLGEOM, the law as a
-  ``*PLASTIC`` table within 1e-5 GPa of it (:func:`plastic_table`), fixed increments (``*STATIC, DIRECT``);
+  ``*PLASTIC`` table within 1e-5 GPa of it (:func:`.necking_law.plastic_table`), fixed increments
+  (``*STATIC, DIRECT``);
   docs/verification/necking_calculix.inp (140 increments) and the histories at 140 and 560
   increments (necking_calculix.csv, necking_calculix_560.csv; the 560 deck differs in the ``*STATIC``
   line only). ``python -m comove_dolfinx.verify.necking --calculix DIR`` writes and runs the deck again.
-* The straight bar's homogeneous response in closed form (:func:`homogeneous`), until the neck forms.
+* The straight bar's homogeneous response in closed form (:func:`.necking_law.homogeneous`), until the
+  neck forms.
 
 Both codes' histories depend on the increment at first order once the neck forms (from 140 to 560
 increments CalculiX's force at 6 mm moves by 0.7 %, ours by 1.1 % with the default update sr_log and
@@ -27,16 +29,22 @@ increments CalculiX's force at 6 mm moves by 0.7 %, ours by 1.1 % with the defau
 and CalculiX's 0.9 % below their limits of vanishing increments, which on this grid lie 0.4 % apart
 (0.16 % with ours on 10 x 80 cells): docs/verification/necking.md, the study.
 :func:`run` writes necking.csv and necking.png to ``out``.
+
+The bar, the law and the closed forms are in :mod:`.necking_law`, CalculiX's deck, run and output in
+:mod:`.necking_calculix`, the mesh and increment study in :mod:`.necking_study`; their names used by
+the case and its tests are importable from here too.
 """
 from __future__ import annotations
 
-import math
 import pathlib
 import time
 
 import numpy as np
 
 from . import Check
+from .necking_calculix import calculix_deck  # noqa: F401 - the deck's writer (its header names it here)
+from .necking_law import (DELTA, DSIGMA, GRADING, LENGTH, N_R, N_STEPS, N_Z, NU, PULL, REDUCTION,  # noqa: F401
+                          SIGMA0, E, H, R, homogeneous, plastic_table, yield_stress)
 
 NAME = "necking"
 TITLE = "Necking of a circular bar (finite-strain J2, saturation hardening)"
@@ -44,161 +52,9 @@ SOURCE = ("J. C. Simo, Comput. Methods Appl. Mech. Engrg. 66 (1988) 199-219 and 
           "J. C. Simo and T. J. R. Hughes, Computational Inelasticity (Springer, 1998); "
           "reference curve: CalculiX ccx 2.20, CAX8R, the same grid (docs/verification/necking_calculix.*)")
 
-# the benchmark, mm and GPa
-R, LENGTH, REDUCTION = 6.413, 53.334, 0.018
-E, NU = 206.9, 0.29
-SIGMA0, H, DSIGMA, DELTA = 0.45, 0.12924, 0.265, 16.93
-PULL = 7.0
 COMPARE_UP_TO = 6.0              # mm of elongation over which the curves are compared
-N_R, N_Z, GRADING = 5, 40, 3.0   # the default mesh (P2 triangles on this grid)
-N_STEPS = 140
 
 DATA = pathlib.Path(__file__).resolve().parents[2] / "docs" / "verification"
-
-
-def yield_stress(p):
-    """sigma_y(p) of the benchmark, GPa."""
-    p = np.asarray(p, dtype=float)
-    return SIGMA0 + H * p + DSIGMA * (1.0 - np.exp(-DELTA * p))
-
-
-def plastic_table(tol: float = 1e-5, p_max: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
-    """The law sampled for a code that takes a piecewise-linear table: points p_k with
-    (p_k+1 - p_k)^2 / 8 max|sigma_y''| <= tol on each interval (the bound of linear interpolation;
-    sigma_y'' = -dsigma delta^2 exp(-delta p), largest at the interval's start), so that the table is
-    within ``tol`` (GPa) of the law up to ``p_max``."""
-    p = [0.0]
-    while p[-1] < p_max:
-        curvature = DSIGMA * DELTA ** 2 * math.exp(-DELTA * p[-1])
-        p.append(min(p[-1] + math.sqrt(8.0 * tol / curvature), p_max))
-    p = np.array(p)
-    return p, yield_stress(p)
-
-
-def uniaxial_state(eps):
-    """Stress and plastic strain of monotonic uniaxial stress at the axial strain ``eps`` (the sum of
-    the increments' strains): sigma = E eps while elastic, else sigma = sigma_y(p) with
-    sigma / E + p = eps (Newton's iteration on p, monotone from p = 0)."""
-    eps = np.asarray(eps, dtype=float)
-    plastic = E * eps > SIGMA0
-    p = np.zeros_like(eps)
-    for _ in range(60):
-        r = eps - yield_stress(p) / E - p
-        p = np.where(plastic, p + r / (1.0 + (H + DSIGMA * DELTA * np.exp(-DELTA * p)) / E), 0.0)
-    return np.where(plastic, yield_stress(p), E * eps), p
-
-
-def homogeneous(u, radius: float = R, half_length: float = 0.5 * LENGTH, n_steps: int | None = None,
-                update: str = "sr_log"):
-    """Force and radius of a straight bar (no imperfection) stretched homogeneously by u on its half
-    length, in uniaxial stress, as long as it stays homogeneous (until the neck forms).
-
-    ``n_steps`` None: the limit of vanishing increments, logarithmic strains, eps_z = ln(1 + u / half_length)
-    = sigma / E + p with sigma = sigma_y(p) once yielding, eps_r = -nu sigma / E - p / 2 and the force
-    sigma pi r^2. A whole number: what the S-R update ``update`` gives exactly in ``n_steps`` equal
-    increments of u (docs/theory.md 3.2: in coaxial stretching an increment's strain is e = r - 1 with
-    "sr" and e = 2 (r - 1) / (r + 1) with "sr_log", r = lambda_k+1 / lambda_k its stretch ratio), with
-    the same law; the return is radial (the stress stays uniaxial), so it is exact along the path, and
-    the lateral strain of increment k is e_r = -nu dsigma_k / E - dp_k / 2, from which its radial
-    stretch ratio follows by inverting that map. ``u`` then is the displacement at the increments (a
-    multiple of the increment)."""
-    if update not in ("sr", "sr_log"):
-        raise ValueError(f"update = {update!r}: the discrete solution is written for sr and sr_log")
-    u = np.asarray(u, dtype=float)
-    if n_steps is None:
-        sig, p = uniaxial_state(np.log1p(u / half_length))
-        return sig * math.pi * (radius * np.exp(-NU * sig / E - 0.5 * p)) ** 2, radius * np.exp(-NU * sig / E - 0.5 * p)
-    du = u.max() / n_steps if u.size else 0.0
-    k = np.arange(n_steps + 1)
-    lam = 1.0 + k * du / half_length
-    r = lam[1:] / lam[:-1]
-    eps = np.r_[0.0, np.cumsum(r - 1.0 if update == "sr" else 2.0 * (r - 1.0) / (r + 1.0))]
-    sig, p = uniaxial_state(eps)
-    e_r = -NU * np.diff(sig) / E - 0.5 * np.diff(p)
-    ratio = 1.0 + e_r if update == "sr" else (1.0 + 0.5 * e_r) / (1.0 - 0.5 * e_r)
-    lam_r = np.cumprod(np.r_[1.0, ratio])
-    at = np.rint(u / du).astype(int) if du > 0 else np.zeros(u.shape, dtype=int)
-    r_now = radius * lam_r[at]
-    return sig[at] * math.pi * r_now ** 2, r_now
-
-
-# ------------------------------------------------------------------------------------- CalculiX
-def calculix_deck(n_r: int = N_R, n_z: int = N_Z, grading: float = GRADING, n_steps: int = N_STEPS,
-                  tol: float = 1e-5) -> str:
-    """Our CalculiX input of the bar: CAX8R on the grid of cm.necking_bar_grid (eight-node
-    quadrilaterals with straight edges), NLGEOM, ``n_steps`` fixed increments. Node 1 is the outer
-    node of the neck; the set NEND is the end, whose total reaction is printed each increment."""
-    from ..geometry.builders import necking_bar_grid
-    z, r = necking_bar_grid(R, LENGTH, REDUCTION, n_r, n_z, grading)
-    # nodes on the doubled grid (2 n_z + 1) x (2 n_r + 1): corners at even indices, mid-sides
-    # where one index is odd; the centres (both odd) are not used by eight-node elements
-    zz = np.empty(2 * n_z + 1)
-    zz[0::2], zz[1::2] = z, 0.5 * (z[:-1] + z[1:])
-    frac = np.arange(2 * n_r + 1) / (2 * n_r)
-    radius = R * (1.0 - REDUCTION * (1.0 - zz / (0.5 * LENGTH)))
-    ids, nodes, number = {}, [], 1
-    order = [(0, 2 * n_r)] + [(j, i) for j in range(2 * n_z + 1) for i in range(2 * n_r + 1)
-                               if not (j % 2 and i % 2) and (j, i) != (0, 2 * n_r)]
-    for j, i in order:
-        ids[j, i] = number
-        nodes.append(f"{number}, {radius[j] * frac[i]:.12g}, {zz[j]:.12g}")
-        number += 1
-    elems = []
-    for j in range(n_z):
-        for i in range(n_r):
-            a, b = 2 * j, 2 * i
-            corners = [(a, b), (a, b + 2), (a + 2, b + 2), (a + 2, b)]       # counter-clockwise in (r, z)
-            mids = [(a, b + 1), (a + 1, b + 2), (a + 2, b + 1), (a + 1, b)]
-            elems.append(", ".join(str(ids[k]) for k in corners + mids))
-    pieces = lambda rows: "\n".join(", ".join(str(v) for v in rows[k:k + 8])  # noqa: E731
-                                    for k in range(0, len(rows), 8))
-    axis = [ids[j, 0] for j in range(2 * n_z + 1)]
-    neck = [ids[0, i] for i in range(2 * n_r + 1)]
-    end = [ids[2 * n_z, i] for i in range(2 * n_r + 1)]
-    p, s = plastic_table(tol)
-    plastic = "\n".join(f"{sv:.10g}, {pv:.10g}" for pv, sv in zip(p, s))
-    return "\n".join([
-        "** Necking of a circular bar (Simo 1988), quarter of the axial section, mm and GPa (forces kN).",
-        f"** Written by comove_dolfinx.verify.necking.calculix_deck(n_r={n_r}, n_z={n_z}, "
-        f"grading={grading}, n_steps={n_steps}, tol={tol}).",
-        "*NODE, NSET=NALL", *nodes,
-        "*ELEMENT, TYPE=CAX8R, ELSET=EALL",
-        *(f"{k + 1}, {e}" for k, e in enumerate(elems)),
-        "*NSET, NSET=NAXIS", pieces(axis),
-        "*NSET, NSET=NNECK", pieces(neck),
-        "*NSET, NSET=NEND", pieces(end),
-        "*NSET, NSET=NOUT", "1",
-        "*MATERIAL, NAME=STEEL",
-        "*ELASTIC", f"{E}, {NU}",
-        f"** sigma_y = {SIGMA0} + {H} p + {DSIGMA} (1 - exp(-{DELTA} p)) sampled within {tol} GPa",
-        "*PLASTIC", plastic,
-        "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL",
-        "*BOUNDARY", "NAXIS, 1, 1, 0.0", "NNECK, 2, 2, 0.0",
-        "*STEP, NLGEOM, INC=100000",
-        "*STATIC, DIRECT", f"{1.0 / n_steps:.15g}, 1.0",
-        "*BOUNDARY", f"NEND, 2, 2, {PULL}",
-        "*NODE PRINT, NSET=NEND, TOTALS=ONLY", "RF",
-        "*NODE PRINT, NSET=NOUT", "U",
-        "*END STEP", ""])
-
-
-def read_calculix(dat: str | pathlib.Path, scale: float = 1.0) -> np.ndarray:
-    """(time, u, force, neck radius) of each increment from a .dat file of :func:`calculix_deck`;
-    ``scale`` turns the printed reaction into the total over the circumference."""
-    rows, block, t = [], None, None
-    for line in pathlib.Path(dat).read_text().splitlines():
-        words = line.split()
-        if "total force" in line and "time" in line:
-            block, t = "force", float(words[-1])
-        elif line.strip().startswith("displacements") and "time" in line:
-            block, t = "u", float(words[-1])
-        elif block and len(words) == 3 and block == "force":
-            rows.append([t, scale * float(words[1])])
-            block = None
-        elif block == "u" and len(words) == 4 and words[0] == "1":
-            rows[-1] += [float(words[1]), float(words[2])]
-            block = None
-    return np.array([[t, PULL * t, f, R * (1.0 - REDUCTION) + u_r] for t, f, u_r, _ in rows])
 
 
 # ------------------------------------------------------------------------------------- our run
@@ -340,104 +196,6 @@ def _picture(path: pathlib.Path, runs: dict, ref: np.ndarray, ref_label: str) ->
 
 
 # ------------------------------------------------------------------------------------- reproduce
-CCX_SCALE = 180.0
-"""ccx expands an axisymmetric model into a 2-degree segment and prints its forces for that segment:
-the total over the circumference is 180 times the printed one (checked: the first, elastic increment
-gives E A eps to 0.1 %)."""
-
-
-def run_calculix(folder: pathlib.Path, **grid) -> tuple[np.ndarray, float]:
-    """Write the deck into ``folder`` (bar.inp), run ccx there (one thread) and return its history
-    (time, u, force, neck radius) and its CPU seconds (user + system of the child, os.times)."""
-    import os
-    import subprocess
-    folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "bar.inp").write_text(calculix_deck(**grid))
-    env = dict(os.environ, OMP_NUM_THREADS="1", CCX_NPROC_EQUATION_SOLVER="1")
-    before = os.times()
-    subprocess.run(["ccx", "-i", "bar"], cwd=folder, env=env, check=True, stdout=subprocess.DEVNULL)
-    after = os.times()
-    cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
-    return read_calculix(folder / "bar.dat", CCX_SCALE), cpu
-
-
-def write_history(path: pathlib.Path, hist: np.ndarray) -> None:
-    np.savetxt(path, hist, delimiter=",", fmt="%.9g", header="time,u_mm,force_kN,neck_radius_mm", comments="")
-
-
-STUDY_MESHES = ((3, 24), (5, 40), (8, 64), (10, 80))
-STUDY_STEPS = (140, 280, 560)
-STUDY_CALCULIX = ((3, 24, 140), (5, 40, 140), (5, 40, 280), (5, 40, 560), (8, 64, 140), (10, 80, 140))
-
-
-def study(out: pathlib.Path, calculix: bool = True) -> list[dict]:
-    """Meshes x increments (the library's defaults), and CalculiX on each mesh at 140 increments and on
-    the default mesh at 280 and 560: force and neck radius at 3 and 6 mm, the force's maximum,
-    Newton iterations, cut-backs, CPU seconds. Writes necking_study.csv and necking_study.png to
-    ``out``. Serial."""
-    out = pathlib.Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    rows = []
-    for n_r, n_z in STUDY_MESHES:
-        for n in STUDY_STEPS:
-            r = simulate(n_r=n_r, n_z=n_z, n_steps=n, cache_dir=out / "meshes")
-            rows.append(_study_row("this code (P2 triangles)", n_r, n_z, n, r))
-    for n_r, n_z, n in STUDY_CALCULIX if calculix else ():
-        hist, cpu = run_calculix(out / f"ccx_{n_r}x{n_z}_{n}", n_r=n_r, n_z=n_z, n_steps=n)
-        r = dict(u=np.r_[0.0, hist[:, 1]], force=np.r_[0.0, hist[:, 2]], radius=np.r_[R * (1 - REDUCTION), hist[:, 3]],
-                 newton_its=0, cutbacks=0, cpu_s=cpu, completed=True)
-        rows.append(_study_row("CalculiX (CAX8R)", n_r, n_z, n, r))
-    keys = list(rows[0])
-    with open(out / "necking_study.csv", "w") as f:
-        f.write(",".join(keys) + "\n")
-        for row in rows:
-            f.write(",".join(f"{row[k]:.6g}" if isinstance(row[k], float) else str(row[k]) for k in keys) + "\n")
-    study_picture(out / "necking_study.csv", out / "necking_study.png")
-    return rows
-
-
-def _study_row(code, n_r, n_z, n, r) -> dict:
-    at = lambda col, u: float(np.interp(u, r["u"], r[col]))  # noqa: E731
-    return dict(code=code, n_r=n_r, n_z=n_z, increments=n, force_3mm=at("force", 3.0), force_6mm=at("force", 6.0),
-                radius_3mm=at("radius", 3.0), radius_6mm=at("radius", 6.0), force_max=float(np.max(r["force"])),
-                newton_its=r["newton_its"], cutbacks=r["cutbacks"], cpu_s=float(r["cpu_s"]),
-                completed=bool(r["completed"]))
-
-
-def study_picture(csv: pathlib.Path, png: pathlib.Path) -> None:
-    """The study's table as a picture: force and neck radius at 6 mm against the increment of u, one
-    line per mesh and code (straight lines through 0: first order in the increment)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    rows = np.genfromtxt(csv, delimiter=",", names=True, dtype=None, encoding=None)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    colours = {m: f"C{k}" for k, m in enumerate(STUDY_MESHES)}
-    for code, style in (("this code (P2 triangles)", "o-"), ("CalculiX (CAX8R)", "s--")):
-        for mesh in STUDY_MESHES:
-            sel = (rows["code"] == code) & (rows["n_r"] == mesh[0]) & (rows["n_z"] == mesh[1])
-            if not sel.any():
-                continue
-            du = PULL / rows["increments"][sel]
-            order = np.argsort(du)
-            label = f"{'ours' if code.startswith('this') else 'CalculiX'} {mesh[0]}x{mesh[1]}"
-            for ax, col in zip(axes, ("force_6mm", "radius_6mm")):
-                ax.plot(du[order], rows[col][sel][order], style, color=colours[mesh], ms=4, lw=1,
-                        mfc="none" if code.startswith("Calc") else None, label=label)
-    for ax, what in zip(axes, ("force on the end at u = 6 mm [kN]", "neck radius at u = 6 mm [mm]")):
-        ax.set_xlabel("increment of u [mm] (7 mm / increments)")
-        ax.set_ylabel(what)
-        ax.set_xlim(left=0.0)
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, ncol=2)
-    fig.suptitle("Necking bar: mesh (cells n_r x n_z) and increment study, P2 triangles against CalculiX CAX8R",
-                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(png, dpi=110)
-    plt.close(fig)
-
-
 def main(argv=None) -> None:
     """``python -m comove_dolfinx.verify.necking --calculix DIR``: CalculiX's reference again (the deck,
     its run, the CSV, into DIR); ``--study DIR``: the mesh and increment study; ``--case DIR``: the
@@ -449,10 +207,12 @@ def main(argv=None) -> None:
     ap.add_argument("--case", metavar="DIR")
     args = ap.parse_args(argv)
     if args.calculix:
+        from .necking_calculix import run_calculix, write_history
         hist, cpu = run_calculix(pathlib.Path(args.calculix))
         write_history(pathlib.Path(args.calculix) / "necking_calculix.csv", hist)
         print(f"CalculiX: {len(hist)} increments, {cpu:.2f} s CPU, largest force {hist[:, 2].max():.4f} kN")
     if args.study:
+        from .necking_study import study
         for row in study(pathlib.Path(args.study)):
             print(row)
     if args.case:

@@ -97,7 +97,7 @@ def _fmt(value, key: str) -> str:
 
 def write_table(checks: list[Check], out: pathlib.Path) -> str:
     """out/verify.csv and out/verify.md; returns the Markdown table."""
-    from ..tables import write_table as write_csv
+    from ..io.csv_tables import write_table as write_csv
     rows = [c.row() for c in checks]
     for r, c in zip(rows, checks):
         if c.skipped:

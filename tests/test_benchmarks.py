@@ -1,12 +1,15 @@
-"""The cost benchmark (comove_dolfinx.cost, docs/performance.md): the elastic floor solves the system
+"""The cost benchmarks (comove_dolfinx.benchmarks, docs/performance.md): the elastic floor solves the system
 it assembles, a one-increment floor study of the ring writes its table and chart with its parts
 inside the run, scene parameters reach the runs, the line-search probe and the parts study leave the
-run as it was."""
+run as it was; the deprecated comove_dolfinx.cost still forwards to them."""
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
-from comove_dolfinx import cost
-from comove_dolfinx.tables import read_table
+from comove_dolfinx import benchmarks
+from comove_dolfinx.io.csv_tables import read_table
 
 
 def test_the_floor_solves_the_elastic_system_it_assembles():
@@ -15,8 +18,8 @@ def test_the_floor_solves_the_elastic_system_it_assembles():
     supported rows), so the factorisation and solve must give w back, to round-off, and the
     stiffness is regular on the supported ring (no rigid-body mode left). A matrix and residual of
     different forms, a wrong lifting or a solve that did not happen would not."""
-    run = cost.short_run("ring", 0.22, 1)
-    floor = cost.ElasticFloor(run["model"])
+    run = benchmarks.short_run("ring", 0.22, 1)
+    floor = benchmarks.ElasticFloor(run["model"])
     for _ in range(2):                             # a new field each time, the analysis reused
         times = floor.sample()
         w, x = floor.w.x.array, floor.x.array
@@ -28,7 +31,7 @@ def test_the_floor_solves_the_elastic_system_it_assembles():
 def test_floor_study_writes_its_table_with_the_parts_inside_the_run(tmp_path):
     """The Timer's parts are measured by their own clock calls inside the run, the run's CPU around
     it: they must fit in it. Every Newton iteration evaluates the residual at least once."""
-    rows = cost.floor(tmp_path, sizes=(0.22,), repeats=1, increments=1)
+    rows = benchmarks.floor(tmp_path, sizes=(0.22,), repeats=1, increments=1)
     (row,) = read_table(tmp_path / "floor.csv")
     assert (tmp_path / "floor.png").stat().st_size > 0
     assert int(row["dofs"]) == rows[0]["dofs"] > 1000 and int(row["iterations"]) >= 1
@@ -44,12 +47,12 @@ def test_scene_parameters_reach_the_runs_and_bad_ones_are_refused(capsys):
     the predictor's residuals and back-substitution, with the linear extrapolation nothing; a value
     the scene does not know is a one-line usage error, before any run."""
     def predictor_time(predictor):
-        run = cost.short_run("ring", 0.22, 3, overrides=[f"predictor={predictor}"])
+        run = benchmarks.short_run("ring", 0.22, 3, overrides=[f"predictor={predictor}"])
         assert run["increments"] >= 3
         return run["timer"].get("predictor", 0.0)
     assert predictor_time("tangent") > 0.0 and predictor_time("linear") == 0.0
     with pytest.raises(SystemExit):
-        cost.main(["floor", "--set", "predictor=bogus", "--sizes", "0.22"])
+        benchmarks.main(["floor", "--set", "predictor=bogus", "--sizes", "0.22"])
     err = capsys.readouterr().err.strip().splitlines()
     assert "predictor = 'bogus'" in err[-1] and "tangent" in err[-1]
 
@@ -61,9 +64,9 @@ def test_slope_probe_sees_the_exact_tangent_and_leaves_the_run_as_it_was(tmp_pat
     the residual stiffens well beyond the tangent along du, points that yield at the iterate have
     unloaded (docs/performance.md). The probe evaluates the residual along du and goes back: the
     run is the same to the last bit."""
-    probe = cost.SlopeProbe(count=3, after=0.0, overshoot=0.0)
-    run = cost.short_run("ring", 0.22, 6, monitor=probe)
-    plain = cost.short_run("ring", 0.22, 6)
+    probe = benchmarks.SlopeProbe(count=3, after=0.0, overshoot=0.0)
+    run = benchmarks.short_run("ring", 0.22, 6, monitor=probe)
+    plain = benchmarks.short_run("ring", 0.22, 6)
     assert run["iterations"] == plain["iterations"]
     assert np.array_equal(run["model"].u.x.array, plain["model"].u.x.array)
     assert len(probe.cases) == 3
@@ -82,18 +85,18 @@ def test_slope_probe_sees_the_exact_tangent_and_leaves_the_run_as_it_was(tmp_pat
             assert any(r[3] > 0 for r in case["rows"][:stiff[0] + 1]), case["rows"]
     assert stiffening > 0          # the check above ran (two of the three cases reach 1.5)
     # the command writes the cases' rows (one per step) and the chart
-    cost.main(["slopes", "--sizes", "0.22", "--increments", "24", "--out", str(tmp_path)])
+    benchmarks.main(["slopes", "--sizes", "0.22", "--increments", "24", "--out", str(tmp_path)])
     rows = read_table(tmp_path / "slopes.csv")
-    assert len(rows) % len(cost.SLOPE_STEPS) == 0 and rows
+    assert len(rows) % len(benchmarks.SLOPE_STEPS) == 0 and rows
     assert (tmp_path / "slopes.png").stat().st_size > 0
 
 
 def test_parts_study_times_each_part_three_ways_and_leaves_the_state(tmp_path):
-    """`cost parts` writes one row per part with its three timings (the figures themselves are
+    """`benchmarks parts` writes one row per part with its three timings (the figures themselves are
     benchmarks, not asserted); the stress it evaluates again for the timing (which Newton would
     skip at the same iterate) is the state's to the last bit, so the timing changes nothing the run
     would see."""
-    run = cost.short_run("ring", 0.22, 3)
+    run = benchmarks.short_run("ring", 0.22, 3)
     m, newton = run["model"], run["newton"]
     rnorm = newton.residual()          # the committed state's iterate, evaluated once
     sigma = m.state.sigma.x.array.copy()
@@ -102,7 +105,7 @@ def test_parts_study_times_each_part_three_ways_and_leaves_the_state(tmp_path):
     assert not m.state.sigma.x.array.any() and np.abs(sigma).max() > 0.0
     m.evaluate_stress(again=True)
     assert np.array_equal(m.state.sigma.x.array, sigma) and newton.residual() == rnorm
-    cost.main(["parts", "--sizes", "0.22", "--increments", "2", "--repeats", "2", "--out", str(tmp_path)])
+    benchmarks.main(["parts", "--sizes", "0.22", "--increments", "2", "--repeats", "2", "--out", str(tmp_path)])
     rows = read_table(tmp_path / "parts.csv")
     assert [r["part"] for r in rows] == [
         "residual (stress evaluated again)", "stress evaluation", "residual without the stress",
@@ -112,3 +115,20 @@ def test_parts_study_times_each_part_three_ways_and_leaves_the_state(tmp_path):
         t = [float(r[k]) for k in ("alone_us", "after_factorisation_us", "after_idle_us")]
         assert all(np.isfinite(v) and v > 0.0 for v in t), r
     assert (tmp_path / "parts.png").stat().st_size > 0
+
+
+def test_the_deprecated_cost_module_forwards_with_a_warning():
+    """``comove_dolfinx.cost`` (the benchmarks' former home) gives the benchmarks' names and runs
+    their command, each with a DeprecationWarning that names the new place; a name the benchmarks
+    lack stays an AttributeError."""
+    from comove_dolfinx import cost
+    with pytest.warns(DeprecationWarning, match="comove_dolfinx.benchmarks.SlopeProbe"):
+        assert cost.SlopeProbe is benchmarks.SlopeProbe
+    with pytest.raises(AttributeError):
+        cost.no_such_name
+    p = subprocess.run([sys.executable, "-m", "comove_dolfinx.cost", "floor", "--set", "predictor=bogus"],
+                       capture_output=True, text=True)
+    err = p.stderr.strip().splitlines()
+    assert p.returncode == 2
+    assert any("DeprecationWarning" in line and "python -m comove_dolfinx.benchmarks" in line for line in err)
+    assert err[-1].startswith("python -m comove_dolfinx.cost: error: ") and "predictor = 'bogus'" in err[-1]

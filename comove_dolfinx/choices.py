@@ -1,5 +1,10 @@
-"""The names the user chooses from (checked before anything heavy is imported); the modules that
-implement them check that they implement exactly these."""
+"""The choices a user picks from, and the rule for a step's first increment.
+
+The kinematic models, stress updates, contact methods, friction laws, predictors and plasticity
+laws by the names a scene, a problem file or the API takes, and :func:`first_increment_error`;
+checked here before anything heavy is imported. The modules that implement the choices check that
+they implement exactly these (tests/test_input.py).
+"""
 
 MODELS = ("plane_strain", "plane_stress", "axisymmetric")
 UPDATES = ("sr_log", "sr", "hughes_winget", "polar", "svk", "neo_hooke", "small_strain")
