@@ -40,7 +40,7 @@ class ContactHistory:
         self.base = self._base_kept = None
         self._p_lag = self._p_lag_form = self._vec = None
 
-    def follow(self, terms, ctx, boundary: str) -> None:
+    def bind(self, terms, ctx, boundary: str) -> None:
         """Take from the contact's built ``terms`` what the history updates: the lag state's
         pressure (which a relag pass compares), Nitsche's base, and the penalty's new stick part
         (compiled here, with the model's forms: every commit needs it)."""

@@ -115,7 +115,7 @@ class Contact(Item):
         self.history = ContactHistory(ctx, self.obstacle.displacement(self.factor_n),
                                       stick=self.mu > 0 and self.method == "penalty")
         self.terms = ContactTerms(self, ctx, self.h, self.history)
-        self.history.follow(self.terms, ctx, self.boundary)
+        self.history.bind(self.terms, ctx, self.boundary)
         self.outputs = ContactOutputs(self, ctx)
         return self.terms.R_c
 

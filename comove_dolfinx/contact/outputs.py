@@ -53,7 +53,7 @@ class ContactOutputs:
     It reads the item's terms (contact/terms.py) and compiles its forms and expressions on first
     use, so that a run that never asks for a result does not pay for its compilation. Its parts:
     ``boundary`` (the boundary's nodes, fields.BoundaryNodes), ``fields`` (the nodal pressure and
-    shear, fields.BoundaryFields) and ``sampled`` (the pressure profile, its zones and peak,
+    shear, fields.BoundaryFields) and ``facet_profile`` (the pressure profile, its zones and peak,
     profile.FacetProfile).
     """
 
@@ -77,8 +77,8 @@ class ContactOutputs:
         q_cur = terms.q_ref / stretch if terms.q_ref is not None else None
         self.boundary = BoundaryNodes.of(ctx, item.boundary)
         self.fields = BoundaryFields(ctx, item.boundary, p_cur, q_cur, terms.ds, self.boundary, self.comm)
-        self.sampled = FacetProfile(ctx, item.obstacle, item.u, p_cur, q_cur, N, ctx.facets(item.boundary),
-                                    self.comm)
+        self.facet_profile = FacetProfile(ctx, item.obstacle, item.u, p_cur, q_cur, N,
+                                          ctx.facets(item.boundary), self.comm)
 
     def _form(self, name: str):
         """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
@@ -121,7 +121,7 @@ class ContactOutputs:
 
     def zone(self) -> ZoneInfo:
         """The contact set's current length (between its edges) and the largest nodal penetration."""
-        return ZoneInfo(self.sampled.extent(), self.max_penetration())
+        return ZoneInfo(self.facet_profile.extent(), self.max_penetration())
 
     @property
     def pressure(self):
@@ -137,11 +137,11 @@ class ContactOutputs:
 
     update_fields = delegate("fields.update")
     boundary_values = delegate("fields.boundary_values")
-    profile = delegate("sampled.profile")
-    zones = delegate("sampled.zones")
-    extent = delegate("sampled.extent")
-    zone_edges = delegate("sampled.zone_edges")
-    peak_pressure = delegate("sampled.peak_pressure")
+    profile = delegate("facet_profile.profile")
+    zones = delegate("facet_profile.zones")
+    extent = delegate("facet_profile.extent")
+    zone_edges = delegate("facet_profile.zone_edges")
+    peak_pressure = delegate("facet_profile.peak_pressure")
 
 
 def area_stretch(ctx, N):

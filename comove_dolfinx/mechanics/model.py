@@ -12,7 +12,7 @@ parts that each do one job:
   the return map (materials.py, state.py);
 * ``supports`` (supports.py): the Dirichlet conditions, the rigid motions they leave free,
   releasing a support, the reactions;
-* ``checkpoint`` (state_io.py): the converged state as arrays, saved and loaded.
+* ``state_io`` (state_io.py): the converged state as arrays, saved and loaded.
 
 The names that callers use (``residual_form``, ``evaluate_stress``, ``reaction``, ``save_state``,
 ...) are the model's too, each its part's. Items build their terms from a :class:`Context` handed to
@@ -83,7 +83,7 @@ class Model:
         self.items = list(items)
         self.load = 0.0
         self.supports = Supports(self)
-        self.checkpoint = StateIO(self)
+        self.state_io = StateIO(self)
 
     def finalize(self, jit_options: dict | None = None, compiled_return: bool = True) -> None:
         """Build and compile the residual, the Jacobian (:attr:`forms`), the stress evaluation and
@@ -156,9 +156,9 @@ class Model:
     supports_of = delegate("supports.supports_of")
     reaction_forces = delegate("supports.reaction_forces")
     reaction = delegate("supports.reaction")
-    save_state = delegate("checkpoint.save_state")
-    load_state = delegate("checkpoint.load_state")
-    point_coordinates = delegate("checkpoint.point_coordinates")
+    save_state = delegate("state_io.save_state")
+    load_state = delegate("state_io.load_state")
+    point_coordinates = delegate("state_io.point_coordinates")
     # the quadrature state's fields (read by outputs and tests)
     sigma = delegate("state.sigma")
     sigma_n = delegate("state.sigma_n")
