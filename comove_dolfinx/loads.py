@@ -1,115 +1,21 @@
 """Items that load or support a body: prescribed displacements, pressures, tractions, body forces.
 
-Every item follows one protocol (contact items too, contact/item.py):
-
-* ``attach(ctx)``: build its UFL residual term (or None) and its Dirichlet conditions from the
-  model's :class:`mechanics.model.Context`; called once, when the model is compiled;
-* ``reset()``: back to the start of a run (factor 0, no step's ramp, supports in place): a
-  :class:`job.Job` resets its items before each run, so the same items serve several runs;
-* ``set(t)``: the state at load factor t of the current step (amplitudes are Constants, so nothing
-  is recompiled);
-* ``commit()`` / ``restore()``: at a converged / failed increment (history-dependent items);
-* ``bcs``: its Dirichlet conditions; ``nodal(t)``: forces added straight to nodes (point loads).
-
-Amplitudes: an item carries a reference value (a pressure, a vector, a displacement field) scaled by
-a factor; a :class:`job.Step` ramps the factor over the step, linearly from where the previous step
-left it to a target (or along a path of its own), and an item that a step does not mention keeps its
-factor. Signs: the residual is R = f_int - f_ext, so loads contribute -(their virtual work).
+Each follows the item protocol of mechanics/items.py (contact items too, contact/item.py): a factor
+ramped by the steps scales its reference value (a pressure, a vector, a displacement field), and
+``attach`` builds its residual term and Dirichlet conditions from the model's context. Signs: the
+residual is R = f_int - f_ext, so loads contribute -(their virtual work).
 """
 from __future__ import annotations
-
-from typing import Callable
 
 import numpy as np
 import ufl
 from dolfinx import fem
 from petsc4py import PETSc
 
+from .mechanics.items import Item, ItemError
+from .mechanics.items import finite as _finite
 
-class ItemError(ValueError):
-    """An item that cannot be used; the message names the value and the fix."""
-
-
-def _finite(name: str, value, shape: tuple = ()) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if a.shape != shape or not np.all(np.isfinite(a)):
-        want = "a finite number" if shape == () else f"{shape[0]} finite numbers"
-        raise ItemError(f"{name} = {value!r}: give {want}")
-    return a
-
-
-class Item:
-    """Base class: a factor ramped by the steps, no term, no state."""
-
-    kind = "load"          # "load", "support" or "contact"; for listings and default ramps
-
-    def __init__(self, name: str | None = None):
-        self.name = name
-        self.bcs: list = []
-        self.reset()
-
-    def reset(self) -> None:
-        """Back to the start of a run: factor 0, ramped from 0 to 1 over the load range unless a
-        Step says otherwise (a Job calls it before each run)."""
-        self._start, self._target = 0.0, 1.0
-        self._path: Callable[[float], float] | None = None
-        self.factor = 0.0
-
-    # -- steps --------------------------------------------------------------------------------
-    def ramp(self, target) -> None:
-        """Over the coming step, go from the current factor to ``target`` (a number), or follow
-        ``target(s)`` (a callable of the step's load factor s in [0, 1])."""
-        self._start = self.factor
-        if callable(target):
-            self._path, self._target = target, None
-        else:
-            self._path, self._target = None, float(_finite(f"{self} target", target))
-
-    def hold(self) -> None:
-        """Keep the current factor over the coming step."""
-        self.ramp(self.factor)
-
-    def factor_at(self, t: float) -> float:
-        if self._path is not None:
-            return float(self._path(t))
-        return self._start + (self._target - self._start) * t
-
-    def set(self, t: float) -> None:
-        self.factor = self.factor_at(t)
-        self._apply(self.factor)
-
-    def _apply(self, factor: float) -> None:
-        pass
-
-    # -- the protocol's other parts ------------------------------------------------------------
-    def attach(self, ctx):
-        return None
-
-    def nodal(self):
-        """(dofs, forces) added to the nodes at the current factor, or None."""
-        return None
-
-    def commit(self) -> None:
-        pass
-
-    def restore(self) -> None:
-        pass
-
-    # -- checkpoints: what the item holds at a converged increment, before it commits -------------
-    def save_state(self) -> dict:
-        return {"factor": self.factor, "start": self._start}
-
-    def load_state(self, state: dict) -> None:
-        """Back to a saved state; the step's ramp must have been set (``ramp``/``hold``) first."""
-        self._start = float(state["start"])
-        self.set_factor(float(state["factor"]))
-
-    def set_factor(self, factor: float) -> None:
-        self.factor = factor
-        self._apply(factor)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.name or ''})"
+__all__ = ["BodyForce", "Displacement", "Fixed", "Item", "ItemError", "PointLoad", "Pressure", "Traction"]
 
 
 class Displacement(Item):

@@ -92,7 +92,7 @@ class ContactForce(Probe):
 class ContactLength(Probe):
     """Current length of the contact set (times ``scale``): the arc length between the edges of each
     connected contact zone, summed, where an edge is where the pressure at the facet quadrature points
-    reaches zero (contact/outputs.py: interpolated between the last point in contact and the first one
+    reaches zero (contact/zones.py: interpolated between the last point in contact and the first one
     out; a zone that reaches the end of the boundary, e.g. a symmetry line, ends there); the reference
     arc length under linear kinematics (``small_strain``). In axisymmetry, with the boundary starting
     at the axis, the radius of the contact disc. Accuracy against Hertz's half-width: docs/api.md,

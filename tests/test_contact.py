@@ -170,12 +170,12 @@ def _friction_block(block, mu, pull, relag=False, friction="lagged"):
 
     def record(m, inc):
         forces.append(c.force())
-        ux[round(inc.load, 9)] = m.u.x.array.reshape(-1, 2)[c._nodes, 0].copy()
+        ux[round(inc.load, 9)] = m.u.x.array.reshape(-1, 2)[c.nodes, 0].copy()
 
     _solve(m, 8, [record])
     # bottom slip during the pull only, away from the pulled edge (where the shear concentrates and
     # a small zone slips first, as in Cattaneo-Mindlin partial slip)
-    pull_slip = np.abs(ux[1.0] - ux[0.5])[c._X[:, 0] <= 1.0]      # the trailing half
+    pull_slip = np.abs(ux[1.0] - ux[0.5])[c.outputs.boundary.X[:, 0] <= 1.0]      # the trailing half
     slip = m.comm.allreduce(float(pull_slip.max()) if pull_slip.size else 0.0, op=MPI.MAX)
     return slip, p, forces[-1]
 
@@ -311,11 +311,11 @@ def test_boundary_fields_interpolate_like_dolfinx(tmp_path_factory, degree):
     c = Contact("bottom", Plane((0.0, 0.0), (0.0, 1.0)))
     m = Model(Body(md, "plane_strain", Elastic(E, NU), degree=degree), [Fixed("top"), c])
     m.finalize()
-    g = c.outputs._f1
+    g = c.outputs.fields.p1_field
     g.x.array[:] = np.random.default_rng(3).random(g.x.array.size)
     expect = c.pressure.copy()
     expect.interpolate(g)
-    dofs, a, b = c.outputs._p1_to_s
+    dofs, a, b = c.outputs.fields.p1_to_s
     got = np.full_like(expect.x.array, np.nan)
     got[dofs] = 0.5 * (g.x.array[a] + g.x.array[b])
     assert np.abs(got - expect.x.array).max() <= 1e-15
