@@ -23,12 +23,12 @@ def topics(run) -> set[str]:
     return {w.split(":")[0] for w in run.warnings}
 
 
-def check_supports(run, step_index: int, n_steps: int) -> None:
-    """Warn (once) when the step ``step_index`` (from 0, of ``n_steps``) starts with supports that
+def check_supports(run, step_index: int, step_count: int) -> None:
+    """Warn (once) when the step ``step_index`` (from 0, of ``step_count``) starts with supports that
     leave a rigid-body motion free."""
     free = run.model.free_motions()
     if free and "supports" not in topics(run):
-        when = f"from step {step_index + 1} " if n_steps > 1 else ""
+        when = f"from step {step_index + 1} " if step_count > 1 else ""
         run.warnings.append(
             f"supports: {when}the supports leave the body free to move rigidly ({', '.join(free)}); "
             "only contact can hold it there, and until it does the tangent is singular and that "

@@ -75,6 +75,8 @@ class Job:
             return self._run(progress, restart)
 
     def _run(self, progress: bool, restart) -> Results:
+        """:meth:`run` itself: compile, start (or go on from ``restart``), open the writers, run the
+        increment loop (loop.py), and finish, also after a failure or an interrupt."""
         t_start, before = time.perf_counter(), process_clock()[0]
         timer = Timer()
         model = self._compile(timer)
@@ -119,8 +121,9 @@ class Job:
         return model
 
     def _start(self, model, restart) -> tuple[RunState, Results, Restart | None]:
-        """The run state and the results at the start of the run (with what the run restarted
-        from recorded: ``restart``, a checkpoint folder or None), and the checkpoint to go on from."""
+        """The run state and the results as the run starts, and the checkpoint it goes on from
+        (``restart``: a checkpoint folder, or None), whose rows, warnings and failed attempts the
+        state and the results then hold."""
         run = RunState(self, model, self.columns)
         res = Results(list(self.columns), dofs=model.num_dofs())
         run.contact_stats = {"first_contact_load": None, "max_penetration": 0.0}

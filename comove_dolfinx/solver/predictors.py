@@ -39,7 +39,7 @@ def path_rate(points) -> np.ndarray:
 
 def agrees_with_path(model, rate, past, chord_tol: float) -> bool:
     """Whether the path's tangent ``rate`` at the newest state lies within ``chord_tol`` of the
-    rate that the last converged states give, |v - r| <= chord_tol |c|: r the slope of the
+    rate that the last converged states give, ``|v - r| <= chord_tol |c|``: r the slope of the
     quadratic through the last three (second-order accurate on a smooth path, so a path that
     curves, as the elastica's does, is not taken for a spurious mode) or the chord c of the
     last increment while there are two. Near a mechanism (a ring of plastic hinges) the tangent
