@@ -33,7 +33,10 @@ beyond its nominal size, so the run comes back onto the nominal load levels.
 
 Data flows one way: :meth:`IncrementalSolver.increments` yields each converged increment before
 committing it (the consumer reads the converged state), and commits when the consumer asks for the
-next one; nothing is called back.
+next one; nothing is called back. Its parts: where the loop starts (``_begin``), one attempt at an
+increment (``_attempt``), what follows a failed one (``_failed``: the other start, half the size,
+or the end, ``_stop``), a converged one (``_converged``) and its commit (``_commit``); the
+predictors are in predictors.py.
 """
 from __future__ import annotations
 
@@ -155,7 +158,7 @@ class _Loop:
     cut: int = 0                  # halvings of the current increment
     failed_its: int = 0           # iterations of its failed attempts
     retried: bool = False         # it was tried again from the other start
-    retries: int = 0
+    retries: int = 0              # its failed attempts tried again from the other start
     pred_now: bool = False        # the current attempt starts from a predictor
     t_mark: float = 0.0           # when the last increment converged (perf_counter)
     after: tuple = ()             # (past, easy, dt) once the increment yielded is committed
