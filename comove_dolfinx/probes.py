@@ -2,7 +2,7 @@
 
 A probe names its ``columns``, is attached once to the compiled model (``attach(model)``) and returns
 a dict of those columns for the converged state (``__call__(model)``); every rank calls it and gets
-the same values. A job's history is the increment's step and load columns followed by every probe's.
+the same values. A job's history is the increment, time and load columns followed by every probe's.
 
 ::
 

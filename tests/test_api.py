@@ -52,7 +52,7 @@ def test_problem_file_gives_the_ring_history(tmp_path):
                     "--no-progress"])
     assert p.returncode == 0, p.stdout + p.stderr
     new, ref = _history(tmp_path / "history.csv"), _history(REFERENCE / "ring.csv")
-    assert len(new["step"]) == len(ref["step"])
+    assert len(new["increment"]) == len(ref["increment"])
     np.testing.assert_array_equal(new["newton_its"], ref["newton_its"])
     np.testing.assert_allclose(new["time"] * 6.6, ref["load"], rtol=1e-9)    # 10 printed digits
     for col in ("force", "contact_width", "max_plastic_strain"):
@@ -157,7 +157,7 @@ def _stretch_and_release(checkpoint=None, stop_after=None):
 
     class Stop(Writer):
         def write(self, run, row, increment):
-            if stop_after is not None and row["step"] == stop_after:
+            if stop_after is not None and row["increment"] == stop_after:
                 raise RuntimeError("stopped by the test")
     writers = ([checkpoint] if checkpoint is not None else []) + [Stop()]
     probes = [cm.Reaction("right", "end"), cm.Reaction("left", "clamp"),

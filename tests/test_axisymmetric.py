@@ -44,7 +44,7 @@ def test_pressurised_cylinder_is_lame(cache, update):
     m = Model(Body(md, "axisymmetric", Elastic(E, NU), update=update),
               [Fixed("bottom", component=1), Fixed("top", component=1), Pressure("left", p)])
     m.finalize()
-    assert IncrementalSolver(m, StepSettings(n_steps=1, max_cutbacks=0)).run().completed
+    assert IncrementalSolver(m, StepSettings(n_increments=1, max_cutbacks=0)).run().completed
     A = (1 + NU) * (1 - 2 * NU) * p * a ** 2 / (E * (b ** 2 - a ** 2))
     B = (1 + NU) * p * a ** 2 * b ** 2 / (E * (b ** 2 - a ** 2))
     for r in (a, b):
@@ -100,7 +100,7 @@ def test_homogeneous_finite_stretch(cache, update):
     m = Model(Body(md, "axisymmetric", Elastic(E, NU), update=update),
               [Displacement(name, field=field) for name in ("left", "right", "bottom", "top")])
     m.finalize()
-    assert IncrementalSolver(m, StepSettings(n_steps=20, max_cutbacks=0)).run().completed
+    assert IncrementalSolver(m, StepSettings(n_increments=20, max_cutbacks=0)).run().completed
     exact = _homogeneous(l_r, l_z, update, 20)
     np.testing.assert_allclose(m.cauchy_stress(), np.tile(exact, (m.rule.size, 1)),
                                rtol=0, atol=1e-10 * np.abs(exact).max())
@@ -118,7 +118,7 @@ def test_plate_centre_deflection_is_mindlin(cache):
     m = Model(Body(md, "axisymmetric", Elastic(E, NU)),
               [Fixed("axis", component=0), Fixed("rim_support", component=1), Pressure("top", q)])
     m.finalize()
-    assert IncrementalSolver(m, StepSettings(n_steps=1, max_cutbacks=0)).run().completed
+    assert IncrementalSolver(m, StepSettings(n_increments=1, max_cutbacks=0)).run().completed
     D = E * h ** 3 / (12 * (1 - NU ** 2))
     G = E / (2 * (1 + NU))
     w0 = (5 + NU) * q * a ** 4 / (64 * (1 + NU) * D) + q * a ** 2 / (4 * 5 / 6 * G * h)
@@ -129,7 +129,7 @@ def test_plate_centre_deflection_is_mindlin(cache):
 def test_plate_scene_is_in_global_equilibrium(mpi_tmp):
     """The plate pressed onto its base with friction (coarse mesh, 5 increments to p = 10): the
     vertical contact force and the rim support's reaction carry p pi (R + u_r(R, t))^2."""
-    scene = get_scene("plate", ["size=0.5", "n_steps=5"])
+    scene = get_scene("plate", ["size=0.5", "n_increments=5"])
     body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
     model = Model(body, items)
     model.finalize()

@@ -15,9 +15,9 @@ from comove_dolfinx.solver import IncrementalSolver, StepSettings
 E, NU = 1000.0, 0.3
 
 
-def _solve(model, n_steps=1, callbacks=(), max_cutbacks=3):
+def _solve(model, n_increments=1, callbacks=(), max_cutbacks=3):
     model.finalize()
-    res = IncrementalSolver(model, StepSettings(n_steps=n_steps, max_cutbacks=max_cutbacks)).run(callbacks)
+    res = IncrementalSolver(model, StepSettings(n_increments=n_increments, max_cutbacks=max_cutbacks)).run(callbacks)
     assert res.completed, res.message
     return res
 

@@ -170,7 +170,7 @@ def test_the_retry_and_the_counts_are_the_same_on_two_ranks(cache):
 
 
 def test_the_filter_lets_the_users_records_through():
-    from comove_dolfinx.job import _CompilerLines
+    from comove_dolfinx.process import _CompilerLines
     f = _CompilerLines()
     mine = logging.LogRecord("mine", logging.INFO, "/home/me/script.py", 1, "x", None, None)
     build = logging.LogRecord("root", logging.INFO, "/x/setuptools/_distutils/ccompiler.py", 1, "gcc", None, None)
@@ -186,7 +186,7 @@ def test_a_contact_set_that_keeps_switching_is_named_in_the_message(tmp_path):
     many changes over the whole solve."""
     from comove_dolfinx.presets import get_scene
     from comove_dolfinx.stability import Recorder
-    scene = get_scene("beam", ["size=0.25", "gamma0=100000", "n_steps=5", "max_cutbacks=0"])
+    scene = get_scene("beam", ["size=0.25", "gamma0=100000", "n_increments=5", "max_cutbacks=0"])
     job = scene.job(scene.mesh_data(MPI.COMM_WORLD))
     rec = Recorder()
     job.newton.monitor = rec
@@ -205,7 +205,7 @@ class _StopAt(cm.Writer):
         self.k = k
 
     def write(self, run, row, increment):
-        if row["step"] == self.k:
+        if row["increment"] == self.k:
             raise KeyboardInterrupt("test")
 
 
@@ -237,10 +237,10 @@ def test_a_step_under_loads_alone_is_force_controlled():
     """The limit-load hint is given only when nothing but loads move: a pressure against a fixed
     support and a fixed obstacle is force-controlled; a prescribed displacement or an obstacle that
     moves with its factor controls the motion."""
-    from comove_dolfinx.solver.increments import _force_controlled
+    from comove_dolfinx.solver.failures import force_controlled
     floor = cm.Plane((0.0, -3.0), (0.0, 1.0))
-    assert _force_controlled([cm.Fixed("left"), cm.Pressure("top", 0.5), cm.Contact("bottom", floor)])
-    assert not _force_controlled([cm.Fixed("left"), cm.Pressure("top", 0.5), cm.Displacement("right", 0.1, component=0)])
+    assert force_controlled([cm.Fixed("left"), cm.Pressure("top", 0.5), cm.Contact("bottom", floor)])
+    assert not force_controlled([cm.Fixed("left"), cm.Pressure("top", 0.5), cm.Displacement("right", 0.1, component=0)])
     punch = cm.Plane((0.0, 1.0), (0.0, -1.0), motion=(0.0, -0.5))
-    assert not _force_controlled([cm.Fixed("bottom"), cm.Pressure("right", 0.1), cm.Contact("top", punch)])
-    assert not _force_controlled([cm.Fixed("left")])                  # nothing loads the body
+    assert not force_controlled([cm.Fixed("bottom"), cm.Pressure("right", 0.1), cm.Contact("top", punch)])
+    assert not force_controlled([cm.Fixed("left")])                  # nothing loads the body

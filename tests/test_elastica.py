@@ -24,7 +24,7 @@ def test_elastica_tip(update, mpi_tmp):
     extension of the continuum, neglected by the elastica, are O((h/L)^2) ~ 1e-3 here). The rate-form
     updates add a first-order increment error (measured at lam = 1: 0.5 % in v with 10 increments,
     0.05 % with 40), so they run with 20; the shortening L - x ~ v^2 doubles relative errors."""
-    scene = get_scene("elastica", [f"update={update}", "n_steps=20"])
+    scene = get_scene("elastica", [f"update={update}", "n_increments=20"])
     res = run_scene(scene, mpi_tmp / update, progress=False)
     assert res.completed
     rows = {round(r["load"], 9): r for r in read_history(mpi_tmp / update / "history.csv")}
@@ -39,7 +39,7 @@ def _cli(args, n=1, cwd=None):
 
 
 def test_one_and_two_ranks_give_the_same_history(tmp_path):
-    args = ["run", "elastica", "--no-progress", "--set", "n_steps=4", "--set", "lam=3"]
+    args = ["run", "elastica", "--no-progress", "--set", "n_increments=4", "--set", "lam=3"]
     hist = []
     for n in (1, 2):
         out = tmp_path / f"np{n}"
@@ -55,7 +55,7 @@ def test_one_and_two_ranks_give_the_same_history(tmp_path):
 def test_progress_bar_only_on_a_terminal(tmp_path):
     """Run as from a script or into a log (stdout and stderr are pipes here): the console's increment
     lines and no progress bar (tqdm's bar would come out as one line per refresh, '...%|###...')."""
-    p = _cli(["run", "elastica", "--set", "n_steps=2", "--set", "lam=1", "--out", str(tmp_path / "run")])
+    p = _cli(["run", "elastica", "--set", "n_increments=2", "--set", "lam=1", "--out", str(tmp_path / "run")])
     assert p.returncode == 0, p.stderr
     assert "%|" not in p.stderr + p.stdout
-    assert "step   2  load 1" in p.stdout
+    assert "increment   2  load 1" in p.stdout

@@ -13,11 +13,11 @@ from comove_dolfinx.presets import SceneError, get_scene
     (["E=0"], ["E", "0"]),
     (["update=jaumann"], ["jaumann", "sr"]),
     (["size=0"], ["size"]),
-    (["n_steps=0"], ["n_steps"]),
+    (["n_increments=0"], ["n_increments"]),
     (["degree=3"], ["degree"]),
     (["colour=red"], ["colour", "parameters"]),
     (["lam"], ["key=value"]),
-    (["n_steps=ten"], ["n_steps", "int"]),
+    (["n_increments=ten"], ["n_increments", "int"]),
     (["predictor=secant"], ["predictor", "secant", "tangent"]),
     (["first=0.3"], ["first = 0.3", "0.5, 0.25"]),
 ])
@@ -91,7 +91,7 @@ def test_the_names_checked_early_are_those_implemented():
 
 BAD_EARLY = [("ring", "E=-1", "E = -1.0"), ("ring", "size=inf", "size = inf"), ("beam", "L=inf", "L = inf"),
              ("beam", "mu=inf", "mu = inf"), ("beam", "mu=nan", "mu = nan"), ("beam", "gamma0=inf", "gamma0 = inf"),
-             ("beam", "q_max=nan", "q_max = nan"), ("ring", "n_steps=100000000000000000000", "1000000"),
+             ("beam", "q_max=nan", "q_max = nan"), ("ring", "n_increments=100000000000000000000", "1000000"),
              ("ring", "nu=0.5", "nu = 0.5"), ("ring", "hardening=0:2800,0.1:2000", "non-decreasing"),
              ("ring", "hardening=0:2800,0.05:3600,0.01:3000", "hardening = '0:2800,0.05:3600,0.01:3000': row 2"),
              ("elastica", "mesh=nowhere.msh", "nowhere.msh"), ("beam", "E=1e-30", "q_max = 0.5 is not small against E"),
@@ -147,7 +147,8 @@ def test_scenes_listing_into_a_closed_pipe():
 
 def test_version_is_the_package_metadata(capsys):
     """`comove --version` names the version that pyproject.toml gives the package (and CHANGELOG.md's
-    newest entry), so that the three cannot drift apart."""
+    newest released entry, below an "Unreleased" one if there is one), so that the three cannot
+    drift apart."""
     import pathlib
     import re
     import tomllib
@@ -157,5 +158,5 @@ def test_version_is_the_package_metadata(capsys):
         cli.main(["--version"])
     assert exit_.value.code == 0
     assert capsys.readouterr().out.strip() == f"comove {version}"
-    newest = re.search(r"^## (\S+)", (root / "CHANGELOG.md").read_text(), re.M).group(1)
+    newest = re.search(r"^## (?!Unreleased\b)(\S+)", (root / "CHANGELOG.md").read_text(), re.M).group(1)
     assert newest == version

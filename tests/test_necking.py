@@ -5,7 +5,7 @@
   backward-Euler return is exact), in every model; the consistent tangent against finite
   differences.
 * A straight bar pulled homogeneously through the production model: force and radius equal the
-  S-R updates' exact discrete uniaxial solutions (verify.necking.homogeneous with n_steps), which
+  S-R updates' exact discrete uniaxial solutions (verify.necking.homogeneous with n_increments), which
   tends to the logarithmic-strain closed form as the increments shrink.
 * The builder's tags, areas, lengths and grading; the committed CalculiX deck is the one the module
   writes; the sampled *PLASTIC table keeps its interpolation bound.
@@ -112,7 +112,7 @@ def test_homogeneous_bar_follows_the_law(mpi_tmp, update):
     assert res.completed
     u = pull * res["load"]
     force, radius = res["end_fy"], necking.R + res["ur"]
-    f_disc, r_disc = necking.homogeneous(u, n_steps=n, update=update)
+    f_disc, r_disc = necking.homogeneous(u, n_increments=n, update=update)
     assert force == pytest.approx(f_disc, rel=1e-7)
     assert radius == pytest.approx(r_disc, rel=1e-9)
     # well into the saturation term's curvature: the true stress at the end is 1.43 sigma0 (delta p = 1.2)
@@ -124,7 +124,7 @@ def test_discrete_homogeneous_solution_tends_to_the_closed_form(update, order):
     """The S-R discrete solution converges to the logarithmic closed form at first order, the one
     with logarithmic increments at second order."""
     u = np.array([2.0])
-    errs = [abs(necking.homogeneous(u, n_steps=n, update=update)[0][0] / necking.homogeneous(u)[0][0] - 1)
+    errs = [abs(necking.homogeneous(u, n_increments=n, update=update)[0][0] / necking.homogeneous(u)[0][0] - 1)
             for n in (10, 20, 40)]
     assert errs[0] / errs[1] == pytest.approx(2.0 ** order, rel=0.05)
     assert errs[1] / errs[2] == pytest.approx(2.0 ** order, rel=0.05)

@@ -50,7 +50,7 @@ def test_hoop_stress_of_a_pressurised_tube_is_lame(mpi_tmp):
     m = Model(Body(md, "plane_strain", Elastic(E, 0.3)),
               [Fixed("xsym", component=0), Fixed("ysym", component=1), Pressure("inner", p)])
     m.finalize()
-    assert IncrementalSolver(m, StepSettings(n_steps=1, max_cutbacks=0)).run().completed
+    assert IncrementalSolver(m, StepSettings(n_increments=1, max_cutbacks=0)).run().completed
     x = m.x
     r = ufl.sqrt(x[0] ** 2 + x[1] ** 2)
     hoop = FibreStress(m, "hoop", (-x[1] / r, x[0] / r)).values()
@@ -103,7 +103,7 @@ def test_vtk_keeps_every_p2_node_and_all_fields_in_one_dataset(tmp_path, n):
 
     from test_elastica import _cli, read_history
     out = tmp_path / "run"
-    p = _cli(["run", "elastica", "--no-progress", "--out", str(out), "--set", "n_steps=3",
+    p = _cli(["run", "elastica", "--no-progress", "--out", str(out), "--set", "n_increments=3",
               "--set", "lam=2", "--set", "size=0.25"], n=n)
     assert p.returncode == 0, p.stdout + p.stderr
     hist = read_history(out / "history.csv")

@@ -30,7 +30,7 @@ md = geometry.rectangle(1.0, 0.5, 0.125, order=2, comm=comm, cache_dir=sys.argv[
 body = Body(md, "plane_strain", J2(1000.0, 0.3, Hardening.linear(15.0, 100.0)))
 m = Model(body, [Fixed("left"), Displacement("right", (0.05, 0.02))])
 m.finalize(compiled_return=False)     # the return map in NumPy, where a failure is injected
-solver = IncrementalSolver(m, StepSettings(n_steps=3, max_cutbacks=2))
+solver = IncrementalSolver(m, StepSettings(n_increments=3, max_cutbacks=2))
 def report(text):
     lines = comm.gather(f"rank {comm.rank}: {text}")
     if comm.rank == 0:
@@ -53,7 +53,7 @@ report(f"completed={res.completed} increments={len(res.increments)} "
 
 CALLBACK = COMMON + """
 def write(model, inc):
-    if comm.rank == 0 and inc.step == 2:
+    if comm.rank == 0 and inc.number == 2:
         raise OSError("injected: disk full")
 try:
     solver.run([write])

@@ -24,7 +24,7 @@ def test_paraview_warps_and_colours_the_last_increment(tmp_path):
     import meshio
     out = tmp_path / "run"
     p = launch.run(["-m", "comove_dolfinx.cli", "run", "elastica", "--out", out, "--no-progress",
-                    "--set", "n_steps=3", "--set", "size=0.25"])
+                    "--set", "n_increments=3", "--set", "size=0.25"])
     assert p.returncode == 0, p.stderr
     png = tmp_path / "elastica.png"
     # On a loaded machine pvbatch's XOpenDisplay now and then fails against a running Xvfb ("bad X

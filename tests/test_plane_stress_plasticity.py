@@ -38,7 +38,7 @@ def test_strip_tension_follows_the_table_with_its_thickness(mpi_tmp):
              Displacement("right", (stretch - 1.0) * L, component=0)]
     m = Model(Body(md, "plane_stress", J2(E, NU, table)), items)
     m.finalize()
-    res = IncrementalSolver(m, StepSettings(n_steps=10)).run()
+    res = IncrementalSolver(m, StepSettings(n_increments=10)).run()
     assert res.completed, res.message
     # closed form: sigma = sigma_y(ln(lambda) - sigma / E), solved by fixed point (E is large)
     sigma = table.sigma_y(0.0)
@@ -85,7 +85,7 @@ def _bending_moment(kind, cache_dir):
     m = Model(Body(md, kind, J2(el.E, el.nu, Hardening.perfect(s0))),
               [fixed, Displacement("right", field=rotation)])
     m.finalize()
-    res = IncrementalSolver(m, StepSettings(n_steps=8, predictor="tangent"),
+    res = IncrementalSolver(m, StepSettings(n_increments=8, predictor="tangent"),
                             NewtonSettings(line_search="energy")).run()
     assert res.completed, res.message
     X, f = m.reaction_forces("right")

@@ -62,7 +62,7 @@ def test_thick_cylinder_limit_pressure(mpi_tmp, update):
     m = Model(Body(md, "plane_strain", as_material(1000.0, 0.3, "j2", Hardening.perfect(s0)), update=update),
               items)
     m.finalize()
-    res = IncrementalSolver(m, StepSettings(n_steps=10, max_cutbacks=6)).run()
+    res = IncrementalSolver(m, StepSettings(n_increments=10, max_cutbacks=6)).run()
     assert not res.completed                                 # 5 % above the limit: no equilibrium
     carried = res.increments[-1].load * 1.05 * p_lim
     assert 0.985 * p_lim < carried <= 1.002 * p_lim

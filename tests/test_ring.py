@@ -43,7 +43,7 @@ def _thick_ring_slope(scene, plane_strain=True):
 
 def _compliance(mpi_tmp, tag, sets):
     """delta / P of a small elastic approach (0.01, one increment) on the coarse ring."""
-    scene = get_scene("ring", [*COARSE, "delta_max=0.01", "n_steps=1", *sets])
+    scene = get_scene("ring", [*COARSE, "delta_max=0.01", "n_increments=1", *sets])
     res = run_scene(scene, mpi_tmp / tag, progress=False)
     assert res.completed
     row = _history(mpi_tmp / tag)[-1]
@@ -76,7 +76,7 @@ def test_knee_and_post_collapse_band(mpi_tmp):
     (the knee), and stays above the rigid-perfectly-plastic DeRunz-Hodge curve P0 / sqrt(1 - (delta/D)^2)
     (the mild steel hardens) but within 1.6 P0 of it up to delta = 1.5 (hardening to 3600 at 5 %).
     Large increments (0.25) across the knee, with the friction pressure lagged (the paper's scheme)."""
-    scene = get_scene("ring", [*COARSE, "delta_max=1.5", "n_steps=6"])
+    scene = get_scene("ring", [*COARSE, "delta_max=1.5", "n_increments=6"])
     res = run_scene(scene, mpi_tmp, progress=False)
     assert res.completed
     rows = _history(mpi_tmp)

@@ -23,7 +23,7 @@ def _rows(path):
         return list(csv.DictReader(fh))
 
 
-def _start(out, scene="ring", sets=("n_steps=200",)):
+def _start(out, scene="ring", sets=("n_increments=200",)):
     args = [*RUN, scene, "--out", out, "--no-progress"]
     for s in sets:
         args += ["--set", s]
@@ -100,12 +100,12 @@ def test_two_runs_started_together_cannot_both_take_a_folder(tmp_path, monkeypat
 
 def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
     out = tmp_path / "run"
-    first = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=4"])
+    first = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_increments=4"])
     assert first.returncode == 0, first.stderr
-    again = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=2"])
+    again = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_increments=2"])
     assert again.returncode == 2 and "--overwrite" in again.stderr and "Traceback" not in again.stderr
     assert len(_rows(out / "history.csv")) == 4                       # untouched
-    over = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_steps=2",
+    over = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--set", "n_increments=2",
                        "--overwrite"])
     assert over.returncode == 0, over.stderr
     assert len(_rows(out / "history.csv")) == 2
@@ -119,7 +119,7 @@ def test_a_folder_in_use_or_with_old_results_is_refused(tmp_path):
         busy = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite"])
     assert busy.returncode == 2 and f"another run (process {os.getpid()})" in busy.stderr, busy.stderr
     (out / ".lock").write_text(f"{os.getpid()}\n")                    # a pid alone holds nothing
-    stale = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite", "--set", "n_steps=1"])
+    stale = launch.run([*RUN, "elastica", "--out", out, "--no-progress", "--overwrite", "--set", "n_increments=1"])
     assert stale.returncode == 0, stale.stderr
     assert not (out / ".lock").exists()
     afile = tmp_path / "a_file"
@@ -211,7 +211,7 @@ def test_restart_repeats_the_uninterrupted_run(tmp_path, n, n_restart):
     assert len(files) == incs and len(set(files)) == incs
     info = json.loads((out / "run.json").read_text())
     assert info["status"] == "completed" and info["first_contact_load"] == pytest.approx(
-        ring.delta_max / ring.n_steps * ring.first)       # the plate starts tangent to the crown
+        ring.delta_max / ring.n_increments * ring.first)       # the plate starts tangent to the crown
     # the uninterrupted run with the default interval between checkpoints (longer than the run)
     # saved its last increment when it ended, and nothing older is left
     meta = json.loads((tmp_path / "full" / "checkpoint" / "meta.json").read_text())
@@ -246,10 +246,10 @@ def _interrupted(first_writer=None, monitor=None):
 
     class Record(Writer):
         def __init__(self):
-            self.steps, self.closed = [], None
+            self.increments, self.closed = [], None
 
         def write(self, run, row, inc):
-            self.steps.append(row["step"])
+            self.increments.append(row["increment"])
 
         def close(self, run, results):
             self.closed = (results.interrupted, len(results.rows))
@@ -268,7 +268,7 @@ def _interrupted(first_writer=None, monitor=None):
             job.run()
     finally:
         signal.signal(signal.SIGINT, before)
-    return record.steps, record.closed
+    return record.increments, record.closed
 
 
 def test_a_signal_waits_until_the_increment_is_written():
@@ -279,7 +279,7 @@ def test_a_signal_waits_until_the_increment_is_written():
 
     class Kick(Writer):
         def write(self, run, row, inc):
-            if row["step"] == 2:
+            if row["increment"] == 2:
                 signal.raise_signal(signal.SIGINT)
 
     assert _interrupted(first_writer=Kick()) == ([1, 2], (True, 2))

@@ -12,7 +12,7 @@ def test_beam_one_and_two_ranks_give_the_same_history(tmp_path):
     """Coarse beam pressed onto the plane with friction: contact, friction history and the contact
     force are partition-independent."""
     args = ["run", "beam", "--no-progress", "--set", "size=0.25", "--set", "q_max=0.1",
-            "--set", "n_steps=4"]
+            "--set", "n_increments=4"]
     hist = []
     for n in (1, 2):
         out = tmp_path / f"np{n}"
@@ -28,7 +28,7 @@ def test_beam_one_and_two_ranks_give_the_same_history(tmp_path):
 
 def test_obstacle_never_reached_warns(tmp_path):
     p = _cli(["run", "beam", "--no-progress", "--set", "size=0.25", "--set", "gap=50",
-              "--set", "q_max=0.001", "--set", "n_steps=1", "--out", str(tmp_path)])
+              "--set", "q_max=0.001", "--set", "n_increments=1", "--out", str(tmp_path)])
     assert p.returncode == 0, p.stderr
     assert "never touched" in p.stdout
 
@@ -42,7 +42,7 @@ def test_negative_gap_is_refused(tmp_path):
 def test_elastica_one_percent_in_five_increments(mpi_tmp):
     """The S-R update within 1 % of the elastica at lam = 5 in at most 10 equal
     increments, here 5, with no cut-back."""
-    scene = get_scene("elastica", ["n_steps=5", "max_cutbacks=0"])
+    scene = get_scene("elastica", ["n_increments=5", "max_cutbacks=0"])
     res = run_scene(scene, mpi_tmp, progress=False)
     assert res.completed
     row = read_history(mpi_tmp / "history.csv")[-1]

@@ -19,9 +19,9 @@ from comove_dolfinx.solver import IncrementalSolver, NewtonSettings, StepSetting
 E, NU = 1000.0, 0.3
 
 
-def _run(model, n_steps=2, rtol=1e-8):
+def _run(model, n_increments=2, rtol=1e-8):
     model.finalize()
-    res = IncrementalSolver(model, StepSettings(n_steps=n_steps, max_cutbacks=0),
+    res = IncrementalSolver(model, StepSettings(n_increments=n_increments, max_cutbacks=0),
                             NewtonSettings(rtol=rtol)).run()
     assert res.completed, res.message
     return model

@@ -13,9 +13,8 @@ from comove_dolfinx.solver import (
     Newton,
     NewtonSettings,
     StepSettings,
-    _extrapolate,
 )
-from comove_dolfinx.solver.increments import _path_rate
+from comove_dolfinx.solver.predictors import extrapolate, path_rate
 
 # lam = 2 of the inextensible elastica (docs/theory.md section 8.1): v/L
 ELASTICA_2 = 0.49346
@@ -37,10 +36,10 @@ def test_extrapolation_reproduces_polynomial_paths():
     linear = lambda t: a + b * t                      # noqa: E731
     quadratic = lambda t: a + b * t + c * t ** 2      # noqa: E731
     ts = [0.1, 0.25, 0.3]
-    assert np.allclose(_extrapolate([(t, linear(t)) for t in ts[1:]], 0.42), linear(0.42))
-    assert np.allclose(_extrapolate([(t, quadratic(t)) for t in ts], 0.42), quadratic(0.42))
+    assert np.allclose(extrapolate([(t, linear(t)) for t in ts[1:]], 0.42), linear(0.42))
+    assert np.allclose(extrapolate([(t, quadratic(t)) for t in ts], 0.42), quadratic(0.42))
     # and a quadratic path is not reproduced by the linear predictor
-    assert not np.allclose(_extrapolate([(t, quadratic(t)) for t in ts[1:]], 0.42), quadratic(0.42))
+    assert not np.allclose(extrapolate([(t, quadratic(t)) for t in ts[1:]], 0.42), quadratic(0.42))
 
 
 @pytest.mark.mpi
@@ -49,9 +48,9 @@ def test_energy_line_search_reaches_the_elastica(predictor):
     """The globalisation changes the path of the iterations, not the solution: with Crisfield's line
     search (and the linear or the tangent predictor) the elastica still lands on the closed form at
     lam = 2."""
-    scene, model, tip = _elastica(["lam=2", "n_steps=10"])
+    scene, model, tip = _elastica(["lam=2", "n_increments=10"])
     model.finalize()
-    res = IncrementalSolver(model, StepSettings(n_steps=10, predictor=predictor),
+    res = IncrementalSolver(model, StepSettings(n_increments=10, predictor=predictor),
                             NewtonSettings(line_search="energy")).run()
     assert res.completed, res.message
     v = -tip(model)["tip_uy"] / scene.L
@@ -62,19 +61,19 @@ def test_a_smaller_first_increment_doubles_back_onto_the_nominal_levels():
     """first = 1/4 of the nominal increment: the loop starts there, doubles after each easy increment
     only on the grid of the doubled size, and so lands on the nominal load levels; the elastica
     still reaches its closed form at lam = 2. A first increment that is not 1/2^k is refused."""
-    scene, model, tip = _elastica(["lam=2", "n_steps=4"])
+    scene, model, tip = _elastica(["lam=2", "n_increments=4"])
     model.finalize()
-    res = IncrementalSolver(model, StepSettings(n_steps=4, first=0.25, predictor=1)).run()
+    res = IncrementalSolver(model, StepSettings(n_increments=4, first=0.25, predictor=1)).run()
     assert res.completed, res.message
     assert [inc.load for inc in res.increments] == pytest.approx([1 / 16, 1 / 8, 1 / 4, 1 / 2, 3 / 4, 1.0])
     assert -tip(model)["tip_uy"] / scene.L == pytest.approx(ELASTICA_2, rel=5e-3)
     for bad in (0.3, 0.5 ** 7, 0.0, 2.0):
         with pytest.raises(ValueError, match="first"):
-            IncrementalSolver(model, StepSettings(n_steps=4, first=bad))
+            IncrementalSolver(model, StepSettings(n_increments=4, first=bad))
 
 
 def test_unknown_line_search_is_refused():
-    _, model, _ = _elastica(["n_steps=1"])
+    _, model, _ = _elastica(["n_increments=1"])
     model.finalize()
     with pytest.raises(ValueError, match="'bogus'"):
         Newton(model, NewtonSettings(line_search="bogus"))
@@ -91,9 +90,9 @@ def test_tangent_predictor_is_the_derivative_of_the_path():
     the derivative of the path: the chords (u(t + h) - u(t)) / h of converged solutions approach it
     at first order in h (error halves with h; measured 4.5e-2 and 2.2e-2 of |v| for h = 0.1, 0.05, the
     same on two ranks)."""
-    _, model, _ = _elastica(["lam=2", "n_steps=5"])
+    _, model, _ = _elastica(["lam=2", "n_increments=5"])
     model.finalize()
-    solver = IncrementalSolver(model, StepSettings(n_steps=5, t_end=0.5), NewtonSettings())
+    solver = IncrementalSolver(model, StepSettings(n_increments=5, t_end=0.5), NewtonSettings())
     assert solver.run().completed
     rate = fem.Function(model.V)
     assert solver.newton.load_rate(0.5, rate, 1e-6)
@@ -119,9 +118,9 @@ def test_path_rate_is_the_slope_of_the_interpolant():
     path = lambda t: a + b * t + c * t ** 2           # noqa: E731
     slope = lambda t: b + 2 * c * t                   # noqa: E731
     ts = [0.1, 0.25, 0.3]
-    assert np.allclose(_path_rate([(t, path(t)) for t in ts]), slope(0.3))
-    assert np.allclose(_path_rate([(t, a + b * t) for t in ts[1:]]), b)
-    chord = _path_rate([(t, path(t)) for t in ts[1:]])
+    assert np.allclose(path_rate([(t, path(t)) for t in ts]), slope(0.3))
+    assert np.allclose(path_rate([(t, a + b * t) for t in ts[1:]]), b)
+    chord = path_rate([(t, path(t)) for t in ts[1:]])
     assert np.allclose(slope(0.3) - chord, c * (0.3 - 0.25))
 
 
@@ -131,7 +130,7 @@ def test_tangent_predictor_falls_back_to_the_chord():
     accepts 5 % and refuses 20 % with chord_tol = 0.1. With three states on a path that curves (as
     the elastica's does), the exact tangent differs from the chord by more than that, and is
     accepted; the same tangent with a spurious part of 20 % of the chord at one node is refused."""
-    _, model, _ = _elastica(["n_steps=1"])
+    _, model, _ = _elastica(["n_increments=1"])
     model.finalize()
     solver = IncrementalSolver(model, StepSettings(predictor="tangent", chord_tol=0.1))
     rng = np.random.default_rng(1)
@@ -159,9 +158,9 @@ def test_force_scaled_convergence_balances_the_reaction():
     and F_int, the force scale, is what the body carries: its vertical components sum to zero (a
     constant is a rigid motion) and, at the clamp, to the reaction that balances the dead tip load P
     (equilibrium of the whole cantilever, to within rtol)."""
-    scene, model, tip = _elastica(["lam=2", "n_steps=10"])
+    scene, model, tip = _elastica(["lam=2", "n_increments=10"])
     model.finalize()
-    solver = IncrementalSolver(model, StepSettings(n_steps=10), NewtonSettings(scale="force",
+    solver = IncrementalSolver(model, StepSettings(n_increments=10), NewtonSettings(scale="force",
                                                                               rtol=1e-6))
     res = solver.run()
     assert res.completed, res.message
@@ -186,7 +185,7 @@ def test_force_scale_comes_with_the_residual():
     each accepted iterate was tested against is its own ||F_int||, assembled afresh after the
     run's every increment (to round-off), and the split residual still lands on the elastica's
     closed form (the stol test is off, so every increment passes the residual test)."""
-    scene, model, tip = _elastica(["lam=2", "n_steps=10"])
+    scene, model, tip = _elastica(["lam=2", "n_increments=10"])
     model.finalize()
     rtol = 1e-5
 
@@ -206,7 +205,7 @@ def test_force_scale_comes_with_the_residual():
 
     watch = Watch()
     settings = NewtonSettings(scale="force", rtol=rtol, atol=0.0, stol=0.0, monitor=watch)
-    solver = IncrementalSolver(model, StepSettings(n_steps=10), settings)
+    solver = IncrementalSolver(model, StepSettings(n_increments=10), settings)
     res = solver.run()
     assert res.completed, res.message
     assert watch.accepted == len(res.increments) == 10
@@ -232,7 +231,7 @@ def test_load_terms_carry_the_residuals_dependence_on_the_load(mpi_tmp):
                    Displacement("right", value=3e-4, component=0), Pressure("top", 0.02),
                    PointLoad((L, H), (0.0, -0.002))])
     model.finalize()
-    solver = IncrementalSolver(model, StepSettings(n_steps=2), NewtonSettings())
+    solver = IncrementalSolver(model, StepSettings(n_increments=2), NewtonSettings())
     assert solver.run().completed
     assert model.comm.allreduce(float(model.p.x.array.max(initial=0.0)), op=MPI.MAX) > 0.0
     newton, t, h = solver.newton, model.load, 0.25

@@ -24,7 +24,7 @@ def _plate(options, max_cutbacks=6):
     body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
     model = Model(body, items)
     model.finalize()
-    solver = IncrementalSolver(model, StepSettings(n_steps=2, t_end=0.2, max_cutbacks=max_cutbacks),
+    solver = IncrementalSolver(model, StepSettings(n_increments=2, t_end=0.2, max_cutbacks=max_cutbacks),
                                NewtonSettings(petsc_options=options))
     return model, solver, solver.run()
 
@@ -226,7 +226,7 @@ def test_a_failed_mumps_factorisation_says_why_and_stops_at_once():
     body, items, probes = scene.build(scene.mesh_data(MPI.COMM_WORLD))
     model = Model(body, items)
     model.finalize()
-    solver = IncrementalSolver(model, StepSettings(n_steps=2, t_end=0.2, max_cutbacks=6),
+    solver = IncrementalSolver(model, StepSettings(n_increments=2, t_end=0.2, max_cutbacks=6),
                                NewtonSettings(petsc_options={"mat_mumps_icntl_23": 1},
                                               monitor=attempts))
     res = solver.run()

@@ -90,7 +90,7 @@ def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty",
         items.append(c)
     m = Model(Body(meshes[x0], kind, material, update=update), items)
     m.finalize(compiled_return=compiled)
-    solver = IncrementalSolver(m, StepSettings(n_steps=2, t_end=0.4))
+    solver = IncrementalSolver(m, StepSettings(n_increments=2, t_end=0.4))
     res = solver.run()
     assert res.completed, res.message
     m.set_load(0.6)                                  # the next increment: one Newton correction
@@ -212,7 +212,7 @@ def test_small_strain_elastic_residual_is_affine(meshes, kind):
               [_top(x0, None), Pressure("right", 5.0), Traction("left", (2.0, -1.0)),
                BodyForce((2.0, -10.0)), Fixed("bottom")])
     m.finalize()
-    assert IncrementalSolver(m, StepSettings(n_steps=2, t_end=0.4)).run().completed
+    assert IncrementalSolver(m, StepSettings(n_increments=2, t_end=0.4)).run().completed
     m.set_load(0.6)
     m.u.x.array[:] *= 1.5                            # off equilibrium: R(u) is not 0
     result = taylor_test(m, h0=1e-1, n=6)

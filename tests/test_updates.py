@@ -154,7 +154,7 @@ def test_uniaxial_stress_plane_stress_log_strain(tmp_path, n, update):
               [Fixed("left", component=0), Fixed("bottom", component=1),
                Displacement("right", 2.0 * (lam - 1.0), component=0)])
     m.finalize()
-    res = IncrementalSolver(m, StepSettings(n_steps=n, max_cutbacks=0)).run()
+    res = IncrementalSolver(m, StepSettings(n_increments=n, max_cutbacks=0)).run()
     assert res.completed
     sig = m.cauchy_stress()
     lams = 1.0 + np.arange(n + 1) / n * (lam - 1.0)

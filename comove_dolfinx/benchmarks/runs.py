@@ -77,8 +77,8 @@ def short_run(name: str, size: float, increments: int, options: dict | None = No
     scene, model = build(name, size, overrides)
     settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}),
                                    monitor=monitor)
-    steps = dataclasses.replace(scene.steps()[0].settings(), n_steps=increments,
-                                t_end=increments / scene.n_steps)
+    steps = dataclasses.replace(scene.steps()[0].settings(), n_increments=increments,
+                                t_end=increments / scene.n_increments)
     timer = Timer(time.process_time)
     newton = Newton(model, settings, timer)
     calls = {"residual": 0}

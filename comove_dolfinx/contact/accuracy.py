@@ -29,7 +29,7 @@ METHODS = ("penalty", "nitsche")
 
 
 def hertz_run(size: float, method: str, gamma0: float, cache_dir="meshes", depth: float = DEPTH,
-              n_steps: int = 2) -> dict:
+              n_increments: int = 2) -> dict:
     """One run; the errors of the contact results against Hertz (relative, signed)."""
     import comove_dolfinx as cm
     t0 = time.process_time()
@@ -38,7 +38,7 @@ def hertz_run(size: float, method: str, gamma0: float, cache_dir="meshes", depth
     items = [cm.Fixed("xsym", component=0), cm.Displacement("top", -depth, component=1), contact]
     probes = [cm.ContactForce(contact, "P", component=1, scale=2.0), cm.ContactEdges(contact, "edge"),
               cm.ContactLength(contact, "half_width"), cm.ContactPeak(contact, "p_max")]
-    job = cm.Job(cm.Body(mesh, "plane_strain", cm.Elastic(E, NU), update="sr"), items, [cm.Step(n_steps)], probes)
+    job = cm.Job(cm.Body(mesh, "plane_strain", cm.Elastic(E, NU), update="sr"), items, [cm.Step(n_increments)], probes)
     res = job.run()
     if not res.completed:
         raise RuntimeError(res.message)

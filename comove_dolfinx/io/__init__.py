@@ -1,8 +1,9 @@
 """Writers: what a job writes as it goes (plug-ins of :class:`comove_dolfinx.Job`).
 
-A writer has ``open(run)`` (the compiled model, the history's columns, the job), ``write(run, row,
-increment)`` after every converged increment (before the state moves on) and ``close(run, results)``
-at the end, also after a failure. Every rank calls them; a failure on one rank stops all.
+A writer has ``open(run)`` (``run``: the job's run state, comove_dolfinx.results.RunState: the
+compiled model, the history's columns, the job), ``write(run, row, increment)`` after every
+converged increment (before the state moves on) and ``close(run, results)`` at the end, also after
+a failure. Every rank calls them; a failure on one rank stops all.
 
 The names below are imported on first use, so that ``comove_dolfinx.io.folder`` (the output folder's
 checks, which the command makes before it loads dolfinx) and ``comove_dolfinx.io.csv_tables`` (the

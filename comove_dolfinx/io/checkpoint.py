@@ -23,6 +23,7 @@ import time
 import numpy as np
 
 from ..parallel import collective, on_root
+from .csv_tables import current_names
 from .writers import Writer, write_atomic
 
 
@@ -104,7 +105,7 @@ class Checkpoint(Writer):
 
     def write(self, run, row, increment) -> None:
         self.count += 1
-        self._pending = self._take(run, row["step"])
+        self._pending = self._take(run, row["increment"])
         if self.count % self.every:
             return
         # the same decision on every rank (wall clocks differ): rank 0's
@@ -147,7 +148,7 @@ class Checkpoint(Writer):
         if newton.factorised:
             put("u_factorised", ("V", newton.u_factorised))
         meta = {"increment": n, "ranks": comm.size, "step_index": run.step_index,
-                "resume": {"t": rs["t"], "dt": rs["dt"], "step": rs["step"], "easy": rs["easy"],
+                "resume": {"t": rs["t"], "dt": rs["dt"], "increment": rs["increment"], "easy": rs["easy"],
                            "past_t": [t for t, _ in rs["past"]], "use_pred": bool(rs["use_pred"])},
                 "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
                 "rows": list(run.job_rows), "contact": dict(run.contact_stats), "warnings": list(run.warnings),
@@ -204,7 +205,19 @@ def load(folder, comm) -> tuple[dict, list]:
         except (OSError, ValueError, KeyError):
             raise CheckpointError(f"{path}: missing or not a checkpoint of this version: run without "
                                   "--restart") from None
-    return meta, parts
+    return _renamed(meta), parts
+
+
+def _renamed(meta: dict) -> dict:
+    """``meta`` with the names of today where a checkpoint written before a rename has the old ones:
+    the history rows' and the increment loop's increment counter ``step``, now ``increment``."""
+    rows = meta.get("rows", [])
+    names = current_names(rows[0] if rows else [])
+    meta["rows"] = [{names.get(k, k): v for k, v in row.items()} for row in rows]
+    resume = meta.get("resume", {})
+    if "step" in resume and "increment" not in resume:
+        resume["increment"] = resume.pop("step")
+    return meta
 
 
 def restore(meta: dict, parts: list, model, newton) -> dict:

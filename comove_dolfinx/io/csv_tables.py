@@ -4,16 +4,41 @@ from __future__ import annotations
 
 import csv
 import pathlib
+import warnings
 
 import numpy as np
 
+#: history columns that were renamed: old name -> new name
+RENAMED = {"step": "increment"}
 
-def read_history(path, origin: bool = False) -> dict[str, np.ndarray]:
+
+class Columns(dict):
+    """A history's columns (or one of its rows) by name; a renamed column's old name
+    (:data:`RENAMED`) still reads the column, with a DeprecationWarning."""
+
+    def __missing__(self, key):
+        new = RENAMED.get(key) if isinstance(key, str) else None
+        if new is None or new not in self:
+            raise KeyError(key)
+        warnings.warn(f"the history column {key!r} is now called {new!r}", DeprecationWarning, stacklevel=2)
+        return self[new]
+
+
+def current_names(columns) -> dict[str, str]:
+    """Each of ``columns`` (a history's header) under today's name: a renamed column's old name
+    (:data:`RENAMED`) becomes its new one, unless the header has that name already."""
+    columns = list(columns)
+    return {c: RENAMED[c] if c in RENAMED and RENAMED[c] not in columns else c for c in columns}
+
+
+def read_history(path, origin: bool = False) -> Columns:
     """A history CSV as columns; with ``origin`` led by the unloaded state (a row of zeros: no load,
-    displacement, force or contact), so that curves start where the body did."""
+    displacement, force or contact), so that curves start where the body did. A history written
+    before a column was renamed is read under the new name (``step`` as ``increment``)."""
     rows = read_table(path)
     lead = [0.0] if origin else []
-    return {k: np.array(lead + [float(r[k]) for r in rows]) for k in (rows[0] if rows else [])}
+    names = current_names(rows[0] if rows else [])
+    return Columns({new: np.array(lead + [float(r[old]) for r in rows]) for old, new in names.items()})
 
 
 def write_table(path, rows: list[dict], fieldnames=None, append: bool = False) -> None:

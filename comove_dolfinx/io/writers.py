@@ -14,7 +14,10 @@ from ..parallel import on_root
 
 
 class Writer:
-    """Base class: every hook optional."""
+    """Base class: every hook optional. ``run`` is the job's run state (comove_dolfinx.results.RunState:
+    the job, its compiled model, the history's columns, the warnings so far, ...), ``row`` the
+    history row of the converged increment, ``increment`` the increment loop's report of it
+    (solver.Increment), ``results`` the job's Results."""
 
     def open(self, run) -> None:
         pass
@@ -112,7 +115,7 @@ class RunInfo(Writer):
         if time.perf_counter() - self._written < self.interval:
             return
         write_atomic(self.path, self._info(
-            run, "running", f"converged up to increment {row['step']} (time {row['time']:.6g})"))
+            run, "running", f"converged up to increment {row['increment']} (time {row['time']:.6g})"))
         self._written = time.perf_counter()
 
     def close(self, run, results) -> None:
@@ -151,7 +154,7 @@ class Console(Writer):
         done = ([f"{inc.retries} retr{'ies' if inc.retries > 1 else 'y'} from the other start"] if inc.retries else []) + \
             ([f"{inc.cutbacks} cut-back(s)"] if inc.cutbacks else [])
         cut = f" after {' and '.join(done)}" if done else ""
-        self._print(run, f"  step {row['step']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
+        self._print(run, f"  increment {row['increment']:3d}  load {row['load']:.5g}  {inc.newton_its} its{cut}  "
                          f"{extra}  ({inc.wall_s:.2f} s)")
 
     def close(self, run, results) -> None:

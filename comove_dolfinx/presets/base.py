@@ -14,9 +14,13 @@ import os
 from dataclasses import dataclass
 from typing import ClassVar
 
+from ..deprecated import renamed_field, warn_renamed
 from ..mechanics.material_data import Elastic
 from ..choices import CONTACT_METHODS as METHODS
 from ..choices import FRICTION_LAWS, PREDICTORS, UPDATES, first_increment_error
+
+#: scene parameters that were renamed: old name -> new name (``--set`` still takes the old one)
+RENAMED = {"n_steps": "n_increments"}
 
 # dolfinx, gmsh and the rest are imported by the methods that build: checking parameters stays light
 
@@ -25,9 +29,11 @@ class SceneError(ValueError):
     """A scene name or parameter that cannot be used; the message says what to do."""
 
 
+@renamed_field("n_steps", "n_increments")
 @dataclass
 class Scene:
-    """Parameters shared by every scene (numerics)."""
+    """Parameters shared by every scene (numerics). ``n_steps``, the old name of ``n_increments``,
+    is still read and taken by ``--set``, with a DeprecationWarning."""
 
     name: ClassVar[str] = ""
     summary: ClassVar[str] = ""
@@ -38,7 +44,7 @@ class Scene:
         "update": f"stress update: {', '.join(UPDATES)}",
         "degree": "displacement degree (1 or 2)", "size": "mesh size [cm]",
         "order": "geometry order of the mesh (0: same as degree)",
-        "n_steps": "nominal number of equal load increments",
+        "n_increments": "nominal number of equal load increments",
         "max_cutbacks": "halvings of a failed increment before the run stops",
         "first": "the first increment as a fraction 1, 0.5, 0.25, ... of the nominal one (doubled "
                  "back after easy increments)",
@@ -56,7 +62,7 @@ class Scene:
     degree: int = 2
     size: float = 0.125
     order: int = 0
-    n_steps: int = 20
+    n_increments: int = 20
     max_cutbacks: int = 6
     first: float = 1.0
     mesh: str = ""
@@ -70,8 +76,8 @@ class Scene:
             v = getattr(self, f.name)
             if isinstance(v, float) and not math.isfinite(v):
                 raise SceneError(f"{f.name} = {v}: give a finite number")
-        if not 1 <= self.n_steps <= 1_000_000:
-            raise SceneError(f"n_steps = {self.n_steps}: give a number of increments from 1 to 1000000")
+        if not 1 <= self.n_increments <= 1_000_000:
+            raise SceneError(f"n_increments = {self.n_increments}: give a number of increments from 1 to 1000000")
         if not 0 <= self.max_cutbacks <= 30:
             raise SceneError(f"max_cutbacks = {self.max_cutbacks}: give a number from 0 to 30")
         why = first_increment_error(self.first, self.max_cutbacks)
@@ -88,8 +94,8 @@ class Scene:
             raise SceneError(f"order = {self.order}: use 1, 2 or 0 (same as degree)")
         if not self.size > 0:
             raise SceneError(f"size = {self.size}: the mesh size must be > 0")
-        if self.n_steps < 1:
-            raise SceneError(f"n_steps = {self.n_steps}: need at least one increment")
+        if self.n_increments < 1:
+            raise SceneError(f"n_increments = {self.n_increments}: need at least one increment")
         if self.max_cutbacks < 0:
             raise SceneError(f"max_cutbacks = {self.max_cutbacks} must be >= 0")
         if self.predictor not in PREDICTORS:
@@ -120,6 +126,9 @@ class Scene:
         for pair in pairs:
             key, sep, text = pair.partition("=")
             key = key.strip()
+            if key in RENAMED:
+                warn_renamed(f"the scene parameter {key}", RENAMED[key])
+                key = RENAMED[key]
             if not sep:
                 raise SceneError(f"--set {pair!r}: write key=value")
             if key not in types:
@@ -155,9 +164,9 @@ class Scene:
         return NewtonSettings()
 
     def steps(self) -> list:
-        """One step: every item from 0 to 1 in n_steps nominal increments."""
+        """One step: every item from 0 to 1 in n_increments nominal increments."""
         from ..job import Step
-        return [Step(self.n_steps, predictor=self.predictor, max_cutbacks=self.max_cutbacks, first=self.first,
+        return [Step(self.n_increments, predictor=self.predictor, max_cutbacks=self.max_cutbacks, first=self.first,
                      retry=self.retry)]
 
     def job(self, md, writers=()):

@@ -49,7 +49,7 @@ class Elastica(Scene):
     L: float = 10.0
     h: float = 0.25
     lam: float = 5.0
-    n_steps: int = 10
+    n_increments: int = 10
     predictor: str = "tangent"     # 4.8 Newton iterations per increment, 6.8 from the last state
 
     def validate(self):
@@ -224,7 +224,7 @@ class Ring(ContactScene):
     E: float = 1.89e6
     nu: float = 0.3
     size: float = 0.22
-    n_steps: int = 36
+    n_increments: int = 36
     gap: float = 0.0
     gamma0: float = 1.0
     R_out: float = 5.715

@@ -3,9 +3,10 @@
 Every failed Newton solve leaves a :class:`Failure` on the solver (``Newton.failure``): its cause,
 one of the named constants below, the reason as a sentence, and what the iterations showed (the
 residual norms of the accepted iterates, the number of iterations in which the contact set changed).
-The increment loop counts the failed attempts per cause (``RunResult.failures``, a job's
+The increment loop counts the failed attempts per cause (``StepOutcome.failures``, a job's
 ``Results.failures``, run.json's ``"failures"``) and, when a run stops, :func:`advice` turns the last
-failure into one sentence naming what to change.
+failure into one sentence naming what to change (whether the step was under loads alone,
+:func:`force_controlled`, among what it weighs).
 
 Causes (the counting keys, plain strings so that they go to JSON as they are):
 
@@ -20,6 +21,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+
+import numpy as np
 
 INADMISSIBLE = "inadmissible"
 MAX_IT = "max_it"
@@ -130,3 +133,23 @@ def advice(failure: Failure | None, *, contact: bool = False, friction: bool = F
         return f"Newton diverged: take {more}{search}{limit}"
     stick = " (with friction the stick/slip states may be switching: lower gamma0)" if friction else ""
     return f"the residual stalled{stick}: take {more}{search}{limit}"
+
+
+def force_controlled(items) -> bool:
+    """Whether every item that moves over the step is a load (a pressure, traction, body or point
+    force, a released support's force), with no prescribed displacement and no moving obstacle: such
+    a step cannot pass a maximum of the load (a limit load)."""
+    loads = False
+    for item in items:
+        if all(item.factor_at(s) == item.factor_at(0.0) for s in (0.5, 1.0)):
+            continue
+        if item.kind == "load" or getattr(item, "released", False):
+            loads = True
+        elif item.kind == "contact":
+            d = [np.asarray(item.obstacle.displacement(item.factor_at(s)), dtype=float) for s in (0.0, 0.5, 1.0)]
+            if not all(np.array_equal(d[0], v) for v in d[1:]):
+                return False
+        elif getattr(item, "field", None) is not None or np.any(np.asarray(
+                getattr(item, "value", None) if getattr(item, "value", None) is not None else 0.0) != 0.0):
+            return False              # a prescribed displacement (Fixed prescribes none)
+    return loads

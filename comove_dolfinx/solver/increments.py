@@ -33,7 +33,10 @@ beyond its nominal size, so the run comes back onto the nominal load levels.
 
 Data flows one way: :meth:`IncrementalSolver.increments` yields each converged increment before
 committing it (the consumer reads the converged state), and commits when the consumer asks for the
-next one; nothing is called back.
+next one; nothing is called back. Its parts: where the loop starts (``_begin``), one attempt at an
+increment (``_attempt``), what follows a failed one (``_failed``: the other start, half the size,
+or the end, ``_stop``), a converged one (``_converged``) and its commit (``_commit``); the
+predictors are in predictors.py.
 """
 from __future__ import annotations
 
@@ -43,66 +46,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from dolfinx import fem
-from mpi4py import MPI
 
+from ..deprecated import renamed_field, warn_renamed
 from ..mechanics.model import Model
 from ..choices import first_increment_error
 from ..parallel import collective
 from . import failures
 from .newton import Newton, NewtonSettings, Timer
+from .predictors import Starts, agrees_with_path, extrapolate
+
+_extrapolate = extrapolate          # (the names this module had)
 
 log = logging.getLogger("comove")
 
 
-def _extrapolate(points, t: float) -> np.ndarray:
-    """Lagrange extrapolation of the converged states ``points`` = [(t_i, u_i)] to load t."""
-    out = np.zeros_like(points[0][1])
-    for i, (ti, ui) in enumerate(points):
-        w = 1.0
-        for j, (tj, _) in enumerate(points):
-            if j != i:
-                w *= (t - tj) / (ti - tj)
-        out += w * ui
-    return out
-
-
-def _path_rate(points) -> np.ndarray:
-    """du/dt at the newest of the converged states ``points`` = [(t_i, u_i)] (two or three, oldest
-    first): the chord through two; through three the slope of their quadratic, the last chord plus
-    (t2 - t1) times the second divided difference (second-order accurate on a smooth path)."""
-    (t1, u1), (t2, u2) = points[-2:]
-    chord = (u2 - u1) / (t2 - t1)
-    if len(points) < 3:
-        return chord
-    t0, u0 = points[-3]
-    return chord + (t2 - t1) * (chord - (u1 - u0) / (t1 - t0)) / (t2 - t0)
-
-
-def _force_controlled(items) -> bool:
-    """Whether every item that moves over the step is a load (a pressure, traction, body or point
-    force, a released support's force), with no prescribed displacement and no moving obstacle: such
-    a step cannot pass a maximum of the load (a limit load)."""
-    loads = False
-    for item in items:
-        if all(item.factor_at(s) == item.factor_at(0.0) for s in (0.5, 1.0)):
-            continue
-        if item.kind == "load" or getattr(item, "released", False):
-            loads = True
-        elif item.kind == "contact":
-            d = [np.asarray(item.obstacle.displacement(item.factor_at(s)), dtype=float) for s in (0.0, 0.5, 1.0)]
-            if not all(np.array_equal(d[0], v) for v in d[1:]):
-                return False
-        elif getattr(item, "field", None) is not None or np.any(np.asarray(
-                getattr(item, "value", None) if getattr(item, "value", None) is not None else 0.0) != 0.0):
-            return False              # a prescribed displacement (Fixed prescribes none)
-    return loads
-
-
+@renamed_field("n_steps", "n_increments")
 @dataclass
 class StepSettings:
-    """Increment control: nominal number of equal increments over the load range, cut-back, growth."""
+    """Increment control: nominal number of equal increments over the load range, cut-back, growth.
+    (``n_steps``, the old name of ``n_increments``, is still taken, with a DeprecationWarning.)"""
 
-    n_steps: int = 20
+    n_increments: int = 20
     t_end: float = 1.0
     max_cutbacks: int = 6
     easy_its: int = 8
@@ -127,9 +91,10 @@ class StepSettings:
 
 @dataclass
 class Increment:
-    """What the loop reports of a converged increment."""
+    """What the loop reports of a converged increment (``step``, the old name of ``number``, is
+    still read, with a DeprecationWarning)."""
 
-    step: int
+    number: int                   # the increment's number in its step, from 1
     load: float
     newton_its: int               # iterations of the converged attempt
     wall_s: float                 # wall time since the previous increment, failed attempts included
@@ -137,9 +102,17 @@ class Increment:
     failed_its: int = 0           # iterations spent in failed attempts of this increment
     retries: int = 0              # failed attempts tried again at the same size from the other start
 
+    @property
+    def step(self) -> int:
+        warn_renamed("Increment.step", "Increment.number")
+        return self.number
+
 
 @dataclass
-class RunResult:
+class StepOutcome:
+    """How the increment loop of one step ended: its converged increments, whether it completed,
+    its message, the failed attempts per cause and, if it stopped, what to change."""
+
     increments: list[Increment] = field(default_factory=list)
     completed: bool = False
     message: str = ""
@@ -152,6 +125,58 @@ class RunResult:
         return [inc.newton_its for inc in self.increments]
 
 
+def __getattr__(name: str):
+    """``RunResult``, the old name of :class:`StepOutcome`, with a DeprecationWarning."""
+    if name == "RunResult":
+        warn_renamed("comove_dolfinx.solver.RunResult", "StepOutcome")
+        return StepOutcome
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+@dataclass
+class _Loop:
+    """Where the increment loop of a step stands.
+
+    Where an attempt starts: from a predictor (``pred_now``) or the last converged state. With
+    ``retry`` a failed attempt is tried once more at the same size from the other start before the
+    increment is halved. A predictor that rescues an increment begun from the last state is kept
+    from then on (``use_pred``: that start fails for a lasting reason, its first tangent is elastic
+    where the body flows plastically); the last state that rescues one a predictor led astray
+    serves that increment only (a predictor fails at a change of regime the past states could not
+    foresee: a first contact, a first yield, an unloading)."""
+
+    t: float                      # load factor of the last converged state
+    dt: float                     # size of the next attempt
+    dt_nom: float                 # the nominal increment
+    dt_min: float                 # the smallest increment: dt_nom / 2^max_cutbacks
+    past: list                    # converged (load, u), newest last
+    use_pred: bool                # the step's increments start from a predictor
+    have_rate: bool               # the path's tangent at the last converged state is known (``rate``)
+    from_start: bool              # ... only from the step's start: no chord to check it against
+    count: int = 0                # increments converged in the step
+    easy: int = 0                 # easy increments in a row
+    cut: int = 0                  # halvings of the current increment
+    failed_its: int = 0           # iterations of its failed attempts
+    retried: bool = False         # it was tried again from the other start
+    retries: int = 0              # its failed attempts tried again from the other start
+    pred_now: bool = False        # the current attempt starts from a predictor
+    t_mark: float = 0.0           # when the last increment converged (perf_counter)
+    after: tuple = ()             # (past, easy, dt) once the increment yielded is committed
+
+
+@dataclass
+class _Attempt:
+    """One Newton solve of an increment: converged (``ok``), iterations, reason, the failure, where
+    it started and the residual scale before it."""
+
+    ok: bool
+    its: int
+    reason: str
+    failure: failures.Failure | None
+    started: str
+    scale: float
+
+
 class IncrementalSolver:
     """Load factor t from 0 to t_end in increments, each solved by Newton, with cut-back."""
 
@@ -161,8 +186,8 @@ class IncrementalSolver:
         and residual scale carry over from step to step of a job)."""
         self.model = model
         self.steps = steps or StepSettings()
-        if self.steps.n_steps < 1:
-            raise ValueError(f"n_steps = {self.steps.n_steps}: need at least one increment")
+        if self.steps.n_increments < 1:
+            raise ValueError(f"n_increments = {self.steps.n_increments}: need at least one increment")
         why = first_increment_error(self.steps.first, self.steps.max_cutbacks)
         if why:
             raise ValueError(why)
@@ -175,33 +200,19 @@ class IncrementalSolver:
         self.max_passes = max([item.max_passes for item in self.relaggers] + [1])
 
     def _agrees_with_path(self, rate: fem.Function, past) -> bool:
-        """Whether the path's tangent ``rate`` at the newest state lies within ``chord_tol`` of the
-        rate that the last converged states give, |v - r| <= chord_tol |c|: r the slope of the
-        quadratic through the last three (second-order accurate on a smooth path, so a path that
-        curves, as the elastica's does, is not taken for a spurious mode) or the chord c of the
-        last increment while there are two. Near a mechanism (a ring of plastic hinges) the tangent
-        is almost singular and its solution can carry a spurious part along it; the predictor then
-        takes the chord (linear extrapolation) instead."""
-        (t0, u0), (t1, u1) = past[-2:]
-        chord = (u1 - u0) / (t1 - t0)
-        ref = _path_rate(past[-3:])
-        imap = self.model.V.dofmap.index_map
-        n = imap.size_local * self.model.V.dofmap.index_map_bs
-        d = rate.x.array[:n] - ref[:n]
-        sums = np.array([d @ d, chord[:n] @ chord[:n]])
-        self.model.comm.Allreduce(MPI.IN_PLACE, sums, op=MPI.SUM)     # (a buffer: no pickling)
-        diff2, chord2 = sums
-        return bool(diff2 <= self.steps.chord_tol ** 2 * chord2)
+        """Whether the path's tangent ``rate`` agrees with the last converged states ``past``
+        (predictors.agrees_with_path, within ``chord_tol``)."""
+        return agrees_with_path(self.model, rate, past, self.steps.chord_tol)
 
     def _friction(self) -> bool:
         """Whether a contact item of the model has friction."""
         return any(float(getattr(item, "mu", 0.0) or 0.0) > 0.0 for item in self.newton.contacts)
 
-    def run(self, callbacks=(), progress=None) -> RunResult:
+    def run(self, callbacks=(), progress=None) -> StepOutcome:
         """Run every increment; each callback(model, increment) is called after every converged one
         (a failure of a callback on one rank stops every rank). ``progress``: optional object with
         ``update(dt)`` (tqdm)."""
-        result, last = RunResult(), 0.0
+        result, last = StepOutcome(), 0.0
         for inc in self.increments(result):
             with self.timer("output"):            # before commit: the increment is still visible
                 for cb in callbacks:
@@ -211,140 +222,176 @@ class IncrementalSolver:
             last = inc.load
         return result
 
-    def increments(self, result: RunResult | None = None, resume: dict | None = None):
+    def increments(self, result: StepOutcome | None = None, resume: dict | None = None):
         """Yield every converged increment while the model still holds its state (not yet
-        committed); ``result`` (a RunResult) gathers the increments and says how the loop ended.
+        committed); ``result`` (a StepOutcome) gathers the increments and says how the loop ended.
         ``self.resume_state`` then holds what the loop goes on from (load factor, increment size,
         counters, the predictor's past states): a checkpoint saves it, and ``resume`` (that dict,
         with the model, its items and the last tangent restored and committed) continues the loop
         where it stood, so that a restarted run repeats the uninterrupted one."""
-        result = RunResult() if result is None else result
+        result = StepOutcome() if result is None else result
+        st = self.steps
+        loop = self._begin(resume)
+        tol = 1e-12 * st.t_end
+        while loop.t < st.t_end - tol:
+            loop.dt = min(loop.dt, st.t_end - loop.t)
+            t_try = loop.t + loop.dt
+            attempt = self._attempt(loop, t_try)
+            if not attempt.ok:
+                if self._failed(loop, attempt, t_try, result):
+                    return
+                continue
+            inc = self._converged(loop, attempt.its, t_try, result)
+            yield inc
+            self._commit(loop)
+        result.completed = True
+        result.message = f"completed {loop.count} increments"
+
+    def _begin(self, resume: dict | None) -> _Loop:
+        """Where the loop starts: the step's start, or ``resume`` (a checkpoint's resume dict);
+        the path's tangent there for the tangent predictor, when Newton has a factorised tangent
+        (a later step of a job: the tangent at the state where the last step ended, e.g. the
+        elastic unloading when an obstacle starts to withdraw)."""
         m, st = self.model, self.steps
-        dt_nom = st.t_end / st.n_steps
-        dt, t, step, cut, easy = dt_nom * st.first, 0.0, 0, 0, 0
+        dt_nom = st.t_end / st.n_increments
+        dt, t, count, easy = dt_nom * st.first, 0.0, 0, 0
         dt_min = dt_nom / 2.0 ** st.max_cutbacks
-        past = [(0.0, m.u.x.array.copy())]          # converged (load, u), newest last
-        tangent = st.predictor == "tangent"
-        if isinstance(st.predictor, str) and not tangent:
-            raise ValueError(f"predictor = {st.predictor!r}: choose 0, 1, 2 or tangent")
-        # the tangent's fallback is the linear extrapolation (the chord); it keeps the last three
-        # states, which its check compares it with (_agrees_with_path)
-        order = 1 if tangent else int(st.predictor)
-        alt = 1 if (st.retry and order == 0) else order     # the extrapolation of a predictor start
-        keep = 2 if tangent else alt
-        rate, have_rate = fem.Function(m.V) if tangent else None, False
-        if tangent and self.newton.factorised:
-            # a later step of a job: the path's tangent at the state where the last step ended
-            # (e.g. the elastic unloading when an obstacle starts to withdraw)
+        past = [(0.0, m.u.x.array.copy())]
+        self._starts = starts = Starts.of(st)
+        self._rate = rate = fem.Function(m.V) if starts.tangent else None
+        have_rate = False
+        if starts.tangent and self.newton.factorised:
             have_rate = self.newton.load_rate(0.0, rate, 1e-6 * st.t_end)
         from_start = have_rate          # no chord to check it against: dropped if it fails
         if resume is not None:
-            t, dt, step, easy = resume["t"], resume["dt"], resume["step"], resume["easy"]
+            t, dt, count, easy = resume["t"], resume["dt"], resume["increment"], resume["easy"]
             past = [(float(a), np.array(b)) for a, b in resume["past"]] or past
             from_start = have_rate = False
-            if tangent and self.newton.factorised:
+            if starts.tangent and self.newton.factorised:
                 have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
                              and self._agrees_with_path(rate, past))
-        # where an attempt starts: from a predictor (``use_pred``) or the last converged state. With
-        # ``retry`` a failed attempt is tried once more at the same size from the other start before
-        # the increment is halved. A predictor that rescues an increment begun from the last state
-        # is kept from then on (that start fails for a lasting reason: its first tangent is elastic
-        # where the body flows plastically); the last state that rescues one a predictor led astray
-        # serves that increment only (a predictor fails at a change of regime the past states could
-        # not foresee: a first contact, a first yield, an unloading)
         use_pred = bool(st.predictor) if resume is None else bool(resume.get("use_pred", st.predictor))
-        t_mark, failed_its, retried, retries = time.perf_counter(), 0, False, 0
-        pred_now = use_pred
-        tol = 1e-12 * st.t_end
-        while t < st.t_end - tol:
-            dt = min(dt, st.t_end - t)
-            t_try = t + dt
-            m.set_load(t_try)
-            started = "last state"
-            if pred_now and have_rate:
-                m.u.x.array[:] = m.u_n.x.array + (t_try - t) * rate.x.array
-                started = "tangent"
-            elif pred_now and alt and len(past) > 1:
-                m.u.x.array[:] = _extrapolate(past[-(alt + 1):], t_try)
-                started = "extrapolation"
-            scale = self.newton.residual_scale
-            ok, its, reason = self.newton.solve()
+        return _Loop(t=t, dt=dt, dt_nom=dt_nom, dt_min=dt_min, past=past, use_pred=use_pred,
+                     have_rate=have_rate, from_start=from_start, count=count, easy=easy,
+                     pred_now=use_pred, t_mark=time.perf_counter())
+
+    def _attempt(self, loop: _Loop, t_try: float) -> _Attempt:
+        """Solve the increment to load factor ``t_try`` from its start (the predictor's, or the last
+        converged state), re-lagging the pressure of true Coulomb friction; an iterate that folds
+        the mesh at a node fails it."""
+        m, alt = self.model, self._starts.alt
+        m.set_load(t_try)
+        started = "last state"
+        if loop.pred_now and loop.have_rate:
+            m.u.x.array[:] = m.u_n.x.array + (t_try - loop.t) * self._rate.x.array
+            started = "tangent"
+        elif loop.pred_now and alt and len(loop.past) > 1:
+            m.u.x.array[:] = extrapolate(loop.past[-(alt + 1):], t_try)
+            started = "extrapolation"
+        scale = self.newton.residual_scale
+        ok, its, reason = self.newton.solve()
+        failure = self.newton.failure
+        passes = 1
+        while ok and passes < self.max_passes and any([item.relag_pass() for item in self.relaggers]):
+            ok, more, reason = self.newton.solve()     # true Coulomb: re-lag the pressure
             failure = self.newton.failure
-            passes = 1
-            while ok and passes < self.max_passes and any([item.relag_pass() for item in self.relaggers]):
-                ok, more, reason = self.newton.solve()     # true Coulomb: re-lag the pressure
-                failure = self.newton.failure
-                its += more
-                passes += 1
-            if ok:
-                folded = m.folded_at_nodes()
-                if folded is not None:
-                    ok, reason = False, folded
-                    failure = failures.Failure(failures.INADMISSIBLE, folded, max_it=self.newton.settings.max_it)
-            if not ok:
-                m.restore()
-                # a failed attempt is no measure of the run's forces: an extrapolation that led it
-                # astray can start it at a residual many times the load increment's
-                self.newton.residual_scale = scale
-                if from_start:
-                    have_rate = from_start = False
-                failed_its += its
-                cause = failure.cause if failure is not None else failures.MAX_IT
-                result.failures[cause] = result.failures.get(cause, 0) + 1
-                result.last_failure = failure
-                log.info("  increment to t = %.6g from the %s failed (%s)", t_try, started, reason)
-                if self.newton.hopeless:          # the linear solver's memory or build: no
-                    m.set_load(t)                 # smaller increment helps
-                    result.message = (f"stopped at load factor {t:.6g}: an increment failed in a way "
-                                      f"no smaller increment cures: {reason}")
-                    return
-                # the other start, once per increment: a predictor if the attempt started from the
-                # last state, the last state if a predictor led it astray
-                other = (have_rate or (alt and len(past) > 1)) if started == "last state" else True
-                if st.retry and not retried and other:
-                    retried, retries = True, retries + 1
-                    pred_now = started == "last state"
-                    continue
-                if dt <= dt_min * (1.0 + 1e-9):
-                    m.set_load(t)
-                    result.advice = failures.advice(
-                        failure, contact=bool(self.newton.contacts), friction=self._friction(),
-                        predictor=use_pred, force_controlled=_force_controlled(m.items),
-                        target=self.newton.tolerance, n=st.n_steps,
-                        line_search=self.newton.line_search is not None)
-                    result.message = (f"stopped at load factor {t:.6g}: an increment of the "
-                                      f"smallest size ({dt:.3g}, after {cut} cut-backs in a row)"
-                                      f" failed: {reason}" + (f"; {result.advice}" if result.advice else ""))
-                    return
-                dt *= 0.5
-                cut += 1
-                easy = 0
-                pred_now = use_pred
-                continue
-            if retried and pred_now and not use_pred:
-                log.info("  the increments start from the predictor from now on")
-                use_pred = True
-            t, step = t_try, step + 1
-            inc = Increment(step, t, its, time.perf_counter() - t_mark, cut, failed_its, retries)
-            result.increments.append(inc)
-            cut, failed_its, retried, retries = 0, 0, False, 0
-            pred_now = use_pred
-            # where the loop goes on from (computed before the consumer sees the increment)
-            past_next = past[-keep:] + [(t, m.u.x.array.copy())] if keep else past
-            easy_next, dt_next = easy + 1 if its <= st.easy_its else 0, dt
-            # grow back towards the nominal increment, staying on the grid of the doubled step
-            if easy_next >= st.grow_after and dt < dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
-                dt_next, easy_next = min(2 * dt, dt_nom), 0
-            self.resume_state = {"t": t, "dt": dt_next, "step": step, "easy": easy_next,
-                                 "past": past_next, "use_pred": use_pred}
-            yield inc
-            m.commit()
-            past = past_next
-            if tangent:
-                from_start = False
-                have_rate = (self.newton.load_rate(t, rate, 1e-6 * st.t_end)
-                             and self._agrees_with_path(rate, past))
-            t_mark = time.perf_counter()
-            easy, dt = easy_next, dt_next
-        result.completed = True
-        result.message = f"completed {step} increments"
+            its += more
+            passes += 1
+        if ok:
+            folded = m.folded_at_nodes()
+            if folded is not None:
+                ok, reason = False, folded
+                failure = failures.Failure(failures.INADMISSIBLE, folded, max_it=self.newton.settings.max_it)
+        return _Attempt(ok, its, reason, failure, started, scale)
+
+    def _failed(self, loop: _Loop, attempt: _Attempt, t_try: float, result: StepOutcome) -> bool:
+        """Undo the failed ``attempt`` and count it; then try again from the other start, or at half
+        the size; True when the loop stops (the smallest increment failed, or the linear solver
+        failed in a way no smaller increment cures)."""
+        m = self.model
+        m.restore()
+        # a failed attempt is no measure of the run's forces: an extrapolation that led it
+        # astray can start it at a residual many times the load increment's
+        self.newton.residual_scale = attempt.scale
+        if loop.from_start:
+            loop.have_rate = loop.from_start = False
+        loop.failed_its += attempt.its
+        failure, reason = attempt.failure, attempt.reason
+        cause = failure.cause if failure is not None else failures.MAX_IT
+        result.failures[cause] = result.failures.get(cause, 0) + 1
+        result.last_failure = failure
+        log.info("  increment to t = %.6g from the %s failed (%s)", t_try, attempt.started, reason)
+        if self.newton.hopeless:          # the linear solver's memory or build: no
+            m.set_load(loop.t)            # smaller increment helps
+            result.message = (f"stopped at load factor {loop.t:.6g}: an increment failed in a way "
+                              f"no smaller increment cures: {reason}")
+            return True
+        # the other start, once per increment: a predictor if the attempt started from the
+        # last state, the last state if a predictor led it astray
+        last_state = attempt.started == "last state"
+        other = (loop.have_rate or (self._starts.alt and len(loop.past) > 1)) if last_state else True
+        if self.steps.retry and not loop.retried and other:
+            loop.retried, loop.retries = True, loop.retries + 1
+            loop.pred_now = last_state
+            return False
+        if loop.dt <= loop.dt_min * (1.0 + 1e-9):
+            self._stop(loop, failure, reason, result)
+            return True
+        loop.dt *= 0.5
+        loop.cut += 1
+        loop.easy = 0
+        loop.pred_now = loop.use_pred
+        return False
+
+    def _stop(self, loop: _Loop, failure, reason: str, result: StepOutcome) -> None:
+        """Stop the loop after an increment of the smallest size failed: back at the last converged
+        load, with a message and the advice that the failure suggests."""
+        m, st = self.model, self.steps
+        m.set_load(loop.t)
+        result.advice = failures.advice(
+            failure, contact=bool(self.newton.contacts), friction=self._friction(),
+            predictor=loop.use_pred, force_controlled=failures.force_controlled(m.items),
+            target=self.newton.tolerance, n=st.n_increments,
+            line_search=self.newton.line_search is not None)
+        result.message = (f"stopped at load factor {loop.t:.6g}: an increment of the "
+                          f"smallest size ({loop.dt:.3g}, after {loop.cut} cut-backs in a row)"
+                          f" failed: {reason}" + (f"; {result.advice}" if result.advice else ""))
+
+    def _converged(self, loop: _Loop, its: int, t_try: float, result: StepOutcome) -> Increment:
+        """The increment that converged at ``t_try`` in ``its`` iterations, recorded; and where the
+        loop goes on from once it is committed (``self.resume_state``, computed before the consumer
+        sees the increment, and ``loop.after``)."""
+        st = self.steps
+        if loop.retried and loop.pred_now and not loop.use_pred:
+            log.info("  the increments start from the predictor from now on")
+            loop.use_pred = True
+        loop.t, loop.count = t_try, loop.count + 1
+        t, dt = loop.t, loop.dt
+        inc = Increment(loop.count, t, its, time.perf_counter() - loop.t_mark, loop.cut, loop.failed_its,
+                        loop.retries)
+        result.increments.append(inc)
+        loop.cut, loop.failed_its, loop.retried, loop.retries = 0, 0, False, 0
+        loop.pred_now = loop.use_pred
+        keep = self._starts.keep
+        past_next = loop.past[-keep:] + [(t, self.model.u.x.array.copy())] if keep else loop.past
+        easy_next, dt_next = loop.easy + 1 if its <= st.easy_its else 0, dt
+        # grow back towards the nominal increment, staying on the grid of the doubled step
+        if easy_next >= st.grow_after and dt < loop.dt_nom and abs(t / (2 * dt) - round(t / (2 * dt))) < 1e-9:
+            dt_next, easy_next = min(2 * dt, loop.dt_nom), 0
+        self.resume_state = {"t": t, "dt": dt_next, "increment": loop.count, "easy": easy_next,
+                             "past": past_next, "use_pred": loop.use_pred}
+        loop.after = (past_next, easy_next, dt_next)
+        return inc
+
+    def _commit(self, loop: _Loop) -> None:
+        """Commit the increment the consumer has seen and move the loop on: the predictor's past
+        states, the path's tangent at the new state, the next increment's size."""
+        st = self.steps
+        self.model.commit()
+        loop.past, easy_next, dt_next = loop.after
+        if self._starts.tangent:
+            loop.from_start = False
+            loop.have_rate = (self.newton.load_rate(loop.t, self._rate, 1e-6 * st.t_end)
+                              and self._agrees_with_path(self._rate, loop.past))
+        loop.t_mark = time.perf_counter()
+        loop.easy, loop.dt = easy_next, dt_next

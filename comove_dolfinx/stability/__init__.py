@@ -6,7 +6,7 @@
     python -m comove_dolfinx.stability all --out results/stability        # everything, 2 at a time
 
 For each scene the grid runs the scene with one parameter changed per row (stress update, contact
-method and Nitsche variant, plasticity law) and one per column (nominal increments ``n_steps`` or the
+method and Nitsche variant, plasticity law) and one per column (nominal increments ``n_increments`` or the
 contact weight ``gamma0``), with the scene's cut-backs allowed unless the row says otherwise, and
 classifies each run:
 

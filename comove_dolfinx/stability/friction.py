@@ -99,7 +99,7 @@ def run_friction(out) -> list[dict]:
             rows.append({"scene": "friction", "panel": panel, "method": label, "column": col,
                          "sets": " ".join(f"{k}={v}" for k, v in contact.items()) +
                                  f" gamma0={gamma0:g} n_slide={n_slide} line_search={line_search}",
-                         "n_steps": N_PRESS + n_slide, "gamma0": gamma0, "max_cutbacks": 6,
+                         "n_increments": N_PRESS + n_slide, "gamma0": gamma0, "max_cutbacks": 6,
                          "status": status, "cutbacks": cut,
                          "load_reached": float(last.get("load", 0.0)) if last else 0.0, "load_max": 2.0,
                          "cause": "" if res.completed else classify(res.message, rec.nan_diagnosis,

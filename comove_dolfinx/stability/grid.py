@@ -1,5 +1,5 @@
 """The scenes' grids: one parameter changed per row (stress update, contact method and Nitsche
-variant, plasticity law), one per column (nominal increments ``n_steps`` or the contact weight
+variant, plasticity law), one per column (nominal increments ``n_increments`` or the contact weight
 ``gamma0``); each cell one run of the scene, classified."""
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ _MESHES: dict = {}
 
 
 def _steps(values):
-    return [(str(n), [f"n_steps={n}"]) for n in values]
+    return [(str(n), [f"n_increments={n}"]) for n in values]
 
 
 def panels(scene: str) -> list[Panel]:
@@ -33,22 +33,22 @@ def panels(scene: str) -> list[Panel]:
     if scene == "elastica":
         steps = _steps((1, 2, 3, 4, 5, 10))
         return [Panel("elastica lam = 5: stress update x increments (cut-backs allowed)",
-                      [(u, [f"update={u}"]) for u in UPDATES], steps, "n_steps"),
+                      [(u, [f"update={u}"]) for u in UPDATES], steps, "n_increments"),
                 Panel("elastica lam = 5: no cut-backs (max_cutbacks = 0)",
-                      [(u, [f"update={u}", "max_cutbacks=0"]) for u in UPDATES], steps, "n_steps"),
+                      [(u, [f"update={u}", "max_cutbacks=0"]) for u in UPDATES], steps, "n_increments"),
                 Panel("elastica: the whole load in one increment, no cut-backs: final load lam",
-                      [(u, [f"update={u}", "n_steps=1", "max_cutbacks=0"]) for u in UPDATES],
+                      [(u, [f"update={u}", "n_increments=1", "max_cutbacks=0"]) for u in UPDATES],
                       [(f"{lam:g}", [f"lam={lam:g}"]) for lam in ELASTICA_LAMS], "lam")]
     if scene in ("beam", "plate"):
         return [Panel(f"{scene}: contact method x gamma0 (20 increments)", list(CONTACTS),
                       [(f"{g:g}", [f"gamma0={g:g}"]) for g in GAMMA0[scene]], "gamma0"),
                 Panel(f"{scene}: stress update x increments (penalty, gamma0 = 100)",
-                      [(u, [f"update={u}"]) for u in UPDATES], _steps((2, 5, 10, 20)), "n_steps")]
+                      [(u, [f"update={u}"]) for u in UPDATES], _steps((2, 5, 10, 20)), "n_increments")]
     if scene == "ring":
         rows = [(f"{law} {u}", [f"law={law}", f"update={u}"]) for law in ("j2", "chen")
                 for u in ("sr", "hughes_winget")]
         return [Panel("ring: plasticity law and update x increments (penalty, gamma0 = 1)", rows,
-                      _steps((1, 3, 6, 9, 12, 18, 36)), "n_steps"),
+                      _steps((1, 3, 6, 9, 12, 18, 36)), "n_increments"),
                 Panel("ring: contact method x gamma0 (36 increments, J2)", list(CONTACTS),
                       [(f"{g:g}", [f"gamma0={g:g}"]) for g in GAMMA0["ring"]], "gamma0")]
     raise ValueError(f"unknown scene {scene!r}")
@@ -98,7 +98,7 @@ def run_case(name: str, sets: list[str], folder: pathlib.Path) -> dict:
         res, error = None, f"{type(err).__name__}: {err}"
     cpu = time.process_time() - cpu0
     key, sign = RESULT[name]
-    row = {"n_steps": scene.n_steps, "gamma0": getattr(scene, "gamma0", ""),
+    row = {"n_increments": scene.n_increments, "gamma0": getattr(scene, "gamma0", ""),
            "max_cutbacks": scene.max_cutbacks, "cpu_s": round(cpu, 2),
            "wall_s": round(time.perf_counter() - wall0, 2), "chatter_solves": rec.chatter_solves,
            "set_changes_last_fail": rec.last_failed_changes if rec.failed_solves else ""}

@@ -19,7 +19,7 @@ class Panel:
     column_name: str
 
 
-FIELDS = ["scene", "panel", "method", "column", "sets", "n_steps", "gamma0", "max_cutbacks", "status",
+FIELDS = ["scene", "panel", "method", "column", "sets", "n_increments", "gamma0", "max_cutbacks", "status",
           "cutbacks", "load_reached", "load_max", "cause", "newton_its", "failed_its", "increments",
           "cpu_s", "wall_s", "result", "max_penetration", "penetration_per_h", "chatter_solves",
           "set_changes_last_fail", "peak_gamma",
@@ -170,7 +170,7 @@ def _specific(scene: str, rows: list[dict]) -> list[str]:
         for r in rows:
             key = (r["method"].split()[-1], r["column"])
             if r["method"].startswith("chen ") and key in ref and r["status"] != "failed":
-                devs.append(f"{r['method']}, n_steps {r['column']}: P(6.6) = {_f(r['result']):.5g} "
+                devs.append(f"{r['method']}, n_increments {r['column']}: P(6.6) = {_f(r['result']):.5g} "
                             f"({100 * (_f(r['result']) / ref[key] - 1):+.3f} % against j2 {key[0]}; "
                             f"{r['cutbacks']} cut-backs)")
         if devs:

@@ -97,7 +97,7 @@ def run_shear(out: pathlib.Path) -> list[dict]:
             else:
                 status, cause = ("cutbacks" if cut else "converged"), ""
             rows.append({"scene": "shear", "panel": 0, "method": label, "column": f"{dg:g}",
-                         "sets": f"update={u} dgamma={dg:g}", "n_steps": n, "gamma0": "",
+                         "sets": f"update={u} dgamma={dg:g}", "n_increments": n, "gamma0": "",
                          "max_cutbacks": max_cut, "status": status, "cutbacks": cut,
                          "load_reached": float(gam[-1]), "load_max": SHEAR_GAMMA, "cause": cause,
                          "newton_its": rec.total_its, "failed_its": rec.total_its - sum(res.newton_its),

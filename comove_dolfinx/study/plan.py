@@ -63,13 +63,13 @@ class ScenePlan:
         steps = self.steps[1:4] if quick else self.steps
         out = []
         for u in (self.updates[:2] if quick else self.updates):
-            out += [Case(f"update {u}", n, (f"update={u}", f"n_steps={n}")) for n in steps]
+            out += [Case(f"update {u}", n, (f"update={u}", f"n_increments={n}")) for n in steps]
         if quick:
             return out
         for name, sets in self.contacts + self.extra:
-            out += [Case(name, n, (*sets, f"n_steps={n}")) for n in steps if n in self.steps[1:4]]
+            out += [Case(name, n, (*sets, f"n_increments={n}")) for n in steps if n in self.steps[1:4]]
         for p in self.predictors:
-            out += [Case(f"predictor {p}", n, (f"predictor={p}", f"n_steps={n}")) for n in self.steps[1:4]]
+            out += [Case(f"predictor {p}", n, (f"predictor={p}", f"n_increments={n}")) for n in self.steps[1:4]]
         for degree in (1, 2):
             for f in (2.0, 1.0, 0.5):
                 out.append(Case(f"mesh P{degree}", self.size0 * f,
@@ -79,9 +79,9 @@ class ScenePlan:
     def reference_cases(self) -> dict[str, Case]:
         """Runs of the reference: three meshes at 2 n0, three increment counts on the default mesh."""
         n2 = 2 * self.n0
-        out = {f"h{k}": Case("reference", self.size0 * f, (f"size={self.size0 * f:g}", f"n_steps={n2}"))
+        out = {f"h{k}": Case("reference", self.size0 * f, (f"size={self.size0 * f:g}", f"n_increments={n2}"))
                for k, f in enumerate((2.0, 1.0, 0.5))}
-        out.update({f"n{k}": Case("reference", n, (f"n_steps={n}",))
+        out.update({f"n{k}": Case("reference", n, (f"n_increments={n}",))
                     for k, n in enumerate((self.n0, 2 * self.n0, 4 * self.n0))})
         return out
 

@@ -90,7 +90,7 @@ def run_case(plan: ScenePlan, case: Case, out: pathlib.Path, repeat: int) -> dic
 
 def _nominal(case: Case, plan: ScenePlan) -> int:
     for s in case.sets:
-        if s.startswith("n_steps="):
+        if s.startswith("n_increments="):
             return int(s.split("=", 1)[1])
     return plan.n0
 

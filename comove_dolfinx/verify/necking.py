@@ -43,7 +43,7 @@ import numpy as np
 
 from . import Check
 from .necking_calculix import calculix_deck  # noqa: F401 - the deck's writer (its header names it here)
-from .necking_law import (DELTA, DSIGMA, GRADING, LENGTH, N_R, N_STEPS, N_Z, NU, PULL, REDUCTION,  # noqa: F401
+from .necking_law import (DELTA, DSIGMA, GRADING, LENGTH, N_R, N_INCREMENTS, N_Z, NU, PULL, REDUCTION,  # noqa: F401
                           SIGMA0, E, H, R, homogeneous, plastic_table, yield_stress)
 
 NAME = "necking"
@@ -58,10 +58,10 @@ DATA = pathlib.Path(__file__).resolve().parents[2] / "docs" / "verification"
 
 
 # ------------------------------------------------------------------------------------- our run
-def simulate(n_r: int = N_R, n_z: int = N_Z, n_steps: int = N_STEPS, predictor: str | None = None,
+def simulate(n_r: int = N_R, n_z: int = N_Z, n_increments: int = N_INCREMENTS, predictor: str | None = None,
              grading: float = GRADING, pull: float = PULL, cache_dir: str | pathlib.Path = "meshes",
              degree: int = 2) -> dict:
-    """Run the bar with the public API: P``degree`` triangles on the grid n_r x n_z, ``n_steps``
+    """Run the bar with the public API: P``degree`` triangles on the grid n_r x n_z, ``n_increments``
     nominal increments to the end's displacement ``pull`` (the Step's defaults, or its ``predictor``).
     Returns the columns u, force, radius (the converged increments, the unloaded state first) and
     the run's figures: newton_its, cutbacks, cpu_s (process time of the job's run, compilation
@@ -74,7 +74,7 @@ def simulate(n_r: int = N_R, n_z: int = N_Z, n_steps: int = N_STEPS, predictor: 
     body = cm.Body(mesh, "axisymmetric", law, degree=degree)
     items = [cm.Fixed("axis", component=0), cm.Fixed("neck", component=1),
              cm.Displacement("end", pull, component=1)]
-    step = cm.Step(n_steps) if predictor is None else cm.Step(n_steps, predictor=predictor)
+    step = cm.Step(n_increments) if predictor is None else cm.Step(n_increments, predictor=predictor)
     probes = [cm.Reaction("end", "end"), cm.NodeDisplacement("neck", (R * (1.0 - REDUCTION), 0.0), component=0,
                                                              column="neck_ur")]
     job = cm.Job(body, items, [step], probes=probes)
@@ -97,19 +97,19 @@ def simulate(n_r: int = N_R, n_z: int = N_Z, n_steps: int = N_STEPS, predictor: 
 # back (249 of them at 140 nominal increments, docs/verification/necking.md).
 # the test suite's run: the default mesh itself (1650 dofs, about 2 s of CPU); the coarser 3 x 16
 # grid is 2.2 % off CalculiX's force at 6 mm, a mesh error that says nothing about the code
-SMALL = dict(n_r=N_R, n_z=N_Z, n_steps=N_STEPS)
+SMALL = dict(n_r=N_R, n_z=N_Z, n_increments=N_INCREMENTS)
 SMALL_TOLERANCE = 0.005
 TOLERANCE = 0.005                         # the default mesh against CalculiX on the same grid
 MAX_CUTBACKS = 5                          # halved increments the defaults may take
 
 
-CASE_STEPS = N_STEPS                      # the case's increments, ours and CalculiX's (see run)
+CASE_STEPS = N_INCREMENTS                      # the case's increments, ours and CalculiX's (see run)
 
 
-def reference(n_steps: int = N_STEPS) -> np.ndarray:
-    """CalculiX's history (time, u, force, neck radius) in ``n_steps`` increments (140 or 560),
+def reference(n_increments: int = N_INCREMENTS) -> np.ndarray:
+    """CalculiX's history (time, u, force, neck radius) in ``n_increments`` increments (140 or 560),
     docs/verification/necking_calculix[_560].csv, with the unloaded state as its first row."""
-    name = "necking_calculix.csv" if n_steps == N_STEPS else f"necking_calculix_{n_steps}.csv"
+    name = "necking_calculix.csv" if n_increments == N_INCREMENTS else f"necking_calculix_{n_increments}.csv"
     hist = np.loadtxt(DATA / name, delimiter=",", skiprows=1)
     return np.vstack([[0.0, 0.0, 0.0, R * (1.0 - REDUCTION)], hist])
 
@@ -134,7 +134,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     if MPI.COMM_WORLD.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     ref = reference(CASE_STEPS)
-    args = SMALL if small else dict(n_steps=CASE_STEPS)
+    args = SMALL if small else dict(n_increments=CASE_STEPS)
     ours = simulate(cache_dir=out / "meshes", **args)
     tol = SMALL_TOLERANCE if small else TOLERANCE
     its, cpu = ours["newton_its"], ours["cpu_s"]
@@ -160,7 +160,7 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
         np.savetxt(out / "necking.csv", np.c_[ours["u"], ours["force"], ours["radius"]], delimiter=",",
                    header="u_mm,force_kN,neck_radius_mm", comments="")
         mesh = "{n_r}x{n_z}".format(**{**dict(n_r=N_R, n_z=N_Z), **args})
-        _picture(out / f"{NAME}.png", {f"this code (P2, {mesh}, {args['n_steps']} incr.)": ours}, ref,
+        _picture(out / f"{NAME}.png", {f"this code (P2, {mesh}, {args['n_increments']} incr.)": ours}, ref,
                  f"CalculiX (CAX8R, {N_R}x{N_Z}, {CASE_STEPS} incr.)")
     return checks
 

@@ -12,7 +12,7 @@ import pathlib
 
 import numpy as np
 
-from .necking_law import (DELTA, DSIGMA, GRADING, LENGTH, N_R, N_STEPS, N_Z, NU, PULL, REDUCTION, SIGMA0,
+from .necking_law import (DELTA, DSIGMA, GRADING, LENGTH, N_R, N_INCREMENTS, N_Z, NU, PULL, REDUCTION, SIGMA0,
                           E, H, R, plastic_table)
 
 def _deck_mesh(n_r: int, n_z: int, grading: float) -> tuple[list[str], list[str], dict]:
@@ -44,10 +44,10 @@ def _deck_mesh(n_r: int, n_z: int, grading: float) -> tuple[list[str], list[str]
     return nodes, elems, ids
 
 
-def calculix_deck(n_r: int = N_R, n_z: int = N_Z, grading: float = GRADING, n_steps: int = N_STEPS,
+def calculix_deck(n_r: int = N_R, n_z: int = N_Z, grading: float = GRADING, n_increments: int = N_INCREMENTS,
                   tol: float = 1e-5) -> str:
     """Our CalculiX input of the bar: CAX8R on the grid of cm.necking_bar_grid (eight-node
-    quadrilaterals with straight edges), NLGEOM, ``n_steps`` fixed increments. Node 1 is the outer
+    quadrilaterals with straight edges), NLGEOM, ``n_increments`` fixed increments. Node 1 is the outer
     node of the neck; the set NEND is the end, whose total reaction is printed each increment."""
     nodes, elems, ids = _deck_mesh(n_r, n_z, grading)
     pieces = lambda rows: "\n".join(", ".join(str(v) for v in rows[k:k + 8])  # noqa: E731
@@ -60,7 +60,7 @@ def calculix_deck(n_r: int = N_R, n_z: int = N_Z, grading: float = GRADING, n_st
     return "\n".join([
         "** Necking of a circular bar (Simo 1988), quarter of the axial section, mm and GPa (forces kN).",
         f"** Written by comove_dolfinx.verify.necking.calculix_deck(n_r={n_r}, n_z={n_z}, "
-        f"grading={grading}, n_steps={n_steps}, tol={tol}).",
+        f"grading={grading}, n_increments={n_increments}, tol={tol}).",
         "*NODE, NSET=NALL", *nodes,
         "*ELEMENT, TYPE=CAX8R, ELSET=EALL",
         *(f"{k + 1}, {e}" for k, e in enumerate(elems)),
@@ -75,7 +75,7 @@ def calculix_deck(n_r: int = N_R, n_z: int = N_Z, grading: float = GRADING, n_st
         "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL",
         "*BOUNDARY", "NAXIS, 1, 1, 0.0", "NNECK, 2, 2, 0.0",
         "*STEP, NLGEOM, INC=100000",
-        "*STATIC, DIRECT", f"{1.0 / n_steps:.15g}, 1.0",
+        "*STATIC, DIRECT", f"{1.0 / n_increments:.15g}, 1.0",
         "*BOUNDARY", f"NEND, 2, 2, {PULL}",
         "*NODE PRINT, NSET=NEND, TOTALS=ONLY", "RF",
         "*NODE PRINT, NSET=NOUT", "U",

@@ -18,7 +18,7 @@ E, NU = 206.9, 0.29
 SIGMA0, H, DSIGMA, DELTA = 0.45, 0.12924, 0.265, 16.93
 PULL = 7.0
 N_R, N_Z, GRADING = 5, 40, 3.0   # the default mesh (P2 triangles on this grid)
-N_STEPS = 140
+N_INCREMENTS = 140
 
 
 def yield_stress(p):
@@ -53,14 +53,14 @@ def uniaxial_state(eps):
     return np.where(plastic, yield_stress(p), E * eps), p
 
 
-def homogeneous(u, radius: float = R, half_length: float = 0.5 * LENGTH, n_steps: int | None = None,
+def homogeneous(u, radius: float = R, half_length: float = 0.5 * LENGTH, n_increments: int | None = None,
                 update: str = "sr_log"):
     """Force and radius of a straight bar (no imperfection) stretched homogeneously by u on its half
     length, in uniaxial stress, as long as it stays homogeneous (until the neck forms).
 
-    ``n_steps`` None: the limit of vanishing increments, logarithmic strains, eps_z = ln(1 + u / half_length)
+    ``n_increments`` None: the limit of vanishing increments, logarithmic strains, eps_z = ln(1 + u / half_length)
     = sigma / E + p with sigma = sigma_y(p) once yielding, eps_r = -nu sigma / E - p / 2 and the force
-    sigma pi r^2. A whole number: what the S-R update ``update`` gives exactly in ``n_steps`` equal
+    sigma pi r^2. A whole number: what the S-R update ``update`` gives exactly in ``n_increments`` equal
     increments of u (docs/theory.md 3.2: in coaxial stretching an increment's strain is e = r - 1 with
     "sr" and e = 2 (r - 1) / (r + 1) with "sr_log", r = lambda_k+1 / lambda_k its stretch ratio), with
     the same law; the return is radial (the stress stays uniaxial), so it is exact along the path, and
@@ -70,11 +70,11 @@ def homogeneous(u, radius: float = R, half_length: float = 0.5 * LENGTH, n_steps
     if update not in ("sr", "sr_log"):
         raise ValueError(f"update = {update!r}: the discrete solution is written for sr and sr_log")
     u = np.asarray(u, dtype=float)
-    if n_steps is None:
+    if n_increments is None:
         sig, p = uniaxial_state(np.log1p(u / half_length))
         return sig * math.pi * (radius * np.exp(-NU * sig / E - 0.5 * p)) ** 2, radius * np.exp(-NU * sig / E - 0.5 * p)
-    du = u.max() / n_steps if u.size else 0.0
-    k = np.arange(n_steps + 1)
+    du = u.max() / n_increments if u.size else 0.0
+    k = np.arange(n_increments + 1)
     lam = 1.0 + k * du / half_length
     r = lam[1:] / lam[:-1]
     eps = np.r_[0.0, np.cumsum(r - 1.0 if update == "sr" else 2.0 * (r - 1.0) / (r + 1.0))]

@@ -29,10 +29,10 @@ def study(out: pathlib.Path, calculix: bool = True) -> list[dict]:
     rows = []
     for n_r, n_z in STUDY_MESHES:
         for n in STUDY_STEPS:
-            r = simulate(n_r=n_r, n_z=n_z, n_steps=n, cache_dir=out / "meshes")
+            r = simulate(n_r=n_r, n_z=n_z, n_increments=n, cache_dir=out / "meshes")
             rows.append(_study_row("this code (P2 triangles)", n_r, n_z, n, r))
     for n_r, n_z, n in STUDY_CALCULIX if calculix else ():
-        hist, cpu = run_calculix(out / f"ccx_{n_r}x{n_z}_{n}", n_r=n_r, n_z=n_z, n_steps=n)
+        hist, cpu = run_calculix(out / f"ccx_{n_r}x{n_z}_{n}", n_r=n_r, n_z=n_z, n_increments=n)
         r = dict(u=np.r_[0.0, hist[:, 1]], force=np.r_[0.0, hist[:, 2]], radius=np.r_[R * (1 - REDUCTION), hist[:, 3]],
                  newton_its=0, cutbacks=0, cpu_s=cpu, completed=True)
         rows.append(_study_row("CalculiX (CAX8R)", n_r, n_z, n, r))
