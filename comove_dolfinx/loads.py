@@ -25,17 +25,30 @@ import ufl
 from dolfinx import fem
 from petsc4py import PETSc
 
+from .checks import choice, is_number, text
+
 
 class ItemError(ValueError):
     """An item that cannot be used; the message names the value and the fix."""
 
 
 def _finite(name: str, value, shape: tuple = ()) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
+    """``value`` as a float array of ``shape`` (a number, or a vector of numbers), else ItemError
+    naming it: numbers only (not strings, not True/False), finite."""
+    flat = np.ravel(np.asarray(value, dtype=object)) if shape else [value]
+    ok = len(flat) == (shape[0] if shape else 1) and all(is_number(v) for v in flat)
+    a = np.asarray(value, dtype=float) if ok else np.zeros(0)
     if a.shape != shape or not np.all(np.isfinite(a)):
         want = "a finite number" if shape == () else f"{shape[0]} finite numbers"
         raise ItemError(f"{name} = {value!r}: give {want}")
     return a
+
+
+def _boundary(boundary) -> None:
+    """ItemError unless ``boundary`` is a boundary's name."""
+    why = text("boundary", boundary, "the name of a tagged boundary, e.g. 'left'")
+    if why:
+        raise ItemError(why)
 
 
 class Item:
@@ -121,8 +134,11 @@ class Displacement(Item):
 
     def __init__(self, boundary: str, value=None, component: int | None = None, field=None):
         super().__init__(boundary)
-        if component not in (None, 0, 1):
+        _boundary(boundary)
+        if choice("component", component, (None, 0, 1)):
             raise ItemError(f"component = {component!r}: use 0 (x), 1 (y) or None (both)")
+        if field is not None and not callable(field):
+            raise ItemError(f"boundary {boundary!r}: field = {field!r}: give a function field(x, factor)")
         if value is not None and field is not None:
             raise ItemError(f"boundary {boundary!r}: give a value or a field, not both")
         self.boundary, self.component, self.field = boundary, component, field
@@ -224,6 +240,7 @@ class Pressure(Item):
 
     def __init__(self, boundary: str, p: float):
         super().__init__(boundary)
+        _boundary(boundary)
         self.boundary, self.p = boundary, float(_finite(f"pressure on {boundary!r}", p))
 
     def attach(self, ctx):
@@ -244,6 +261,7 @@ class Traction(Item):
 
     def __init__(self, boundary: str, vector):
         super().__init__(boundary)
+        _boundary(boundary)
         self.boundary, self.traction = boundary, _finite(f"traction on {boundary!r}", vector, (2,))
 
     def attach(self, ctx):
@@ -259,6 +277,8 @@ class BodyForce(Item):
 
     def __init__(self, vector, name: str = "body_force"):
         super().__init__(name)
+        if text("name", name):
+            raise ItemError(text("name", name))
         self.force = _finite("body force", vector, (2,))
 
     def attach(self, ctx):
@@ -277,6 +297,8 @@ class PointLoad(Item):
 
     def __init__(self, point, vector, name: str = "point_load"):
         super().__init__(name)
+        if text("name", name):
+            raise ItemError(text("name", name))
         self.point = _finite("point of the load", point, (2,))
         self.force = _finite("point load", vector, (2,))
 
