@@ -113,7 +113,8 @@ RANGES = {
 }
 WANT = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false", dict: "a table",
         list: "a list of item names", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
-        "vector|number": "a finite number or [x, y]", "names": "a list of names"}
+        "vector|number": "a finite number or [x, y]", "names": "a list of names",
+        "table": "rows [strain, stress]: [[0, sigma_y], ...]"}
 
 
 def _real(v) -> bool:
@@ -133,7 +134,7 @@ def _typed(kind, value) -> bool:
     if kind in ("vector", "vector|number"):
         return (isinstance(value, list) and len(value) == 2 and all(_real(v) for v in value)) or (
             kind == "vector|number" and _real(value))
-    return isinstance(value, list) and len(value) >= 2 and all(     # points
+    return isinstance(value, list) and len(value) >= (2 if kind == "points" else 1) and all(   # points, table
         isinstance(p, list) and len(p) == 2 and all(_real(v) for v in p) for p in value)
 
 
@@ -167,14 +168,18 @@ def _load(path: pathlib.Path) -> dict:
     if unknown:
         raise ProblemError(f"{path}: unknown section {sorted(unknown)[0]!r}; the sections are "
                            f"{', '.join(sorted(SECTIONS))}")
-    for key in ("mesh", "body", "items"):
-        if key not in data:
-            raise ProblemError(f"{path}: the [{key}] section is missing: add it")
-    for key in ("items", "steps", "probes"):
-        if key in data and (not isinstance(data[key], list) or (not data[key] and key != "probes")):
-            raise ProblemError(f"{path}: give the {key} as [[{key}]] tables"
-                               + (" (or leave them out)" if key != "items" else ""))
     return data
+
+
+def _need(path: pathlib.Path, data: dict, key: str):
+    """The section ``key``; [[items]] and [[steps]] non-empty lists of tables, [[probes]] a list."""
+    if key not in data and key in ("mesh", "body", "items"):
+        raise ProblemError(f"{path}: the [{key}] section is missing: add it")
+    value = data.get(key, [])
+    if key in ("items", "steps", "probes") and (not isinstance(value, list) or (not value and key != "probes")):
+        raise ProblemError(f"{path}: give the {key} as [[{key}]] tables"
+                           + (" (or leave them out)" if key != "items" else ""))
+    return value
 
 
 def _mesh(path: pathlib.Path, mesh) -> None:
@@ -212,7 +217,7 @@ def _body(path: pathlib.Path, body) -> None:
     _check(where, body, {"kind": str, "update": str, "degree": int, "thickness": float, "material": dict},
            required=("kind", "material"))
     mat = _check(f"{where} material", body["material"], {"law": str, "E": float, "nu": float,
-                                                        "hardening": "points"}, required=("E", "nu"))
+                                                        "hardening": "table"}, required=("E", "nu"))
     law = mat.get("law", "elastic")
     try:
         Elastic(mat["E"], mat["nu"])
@@ -309,9 +314,11 @@ def read(path) -> dict:
     """Parse and check a problem file; returns its tables (nothing heavy is imported)."""
     path = pathlib.Path(path)
     data = _load(path)
-    _mesh(path, data["mesh"])
-    _body(path, data["body"])
-    names = _items(path, data["items"])
+    _mesh(path, _need(path, data, "mesh"))
+    _body(path, _need(path, data, "body"))
+    names = _items(path, _need(path, data, "items"))
+    if "steps" in data:
+        _need(path, data, "steps")
     _steps(path, data, names)
     newton = data.get("newton", {})
     why = newton_error(newton) if isinstance(newton, dict) else f"expected a table of keys, got {newton!r}"
@@ -319,7 +326,7 @@ def read(path) -> dict:
         why = "monitor: an observer is a Python object; run the problem from Python to give one"
     if why is not None:
         raise ProblemError(f"{path}: [newton] {why}")
-    _probes(path, data.get("probes", []), data["items"], names)
+    _probes(path, _need(path, data, "probes"), data["items"], names)
     return data
 
 
