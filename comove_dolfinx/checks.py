@@ -36,7 +36,9 @@ class SolverOptionError(SettingsError):
 
 # -- one value ------------------------------------------------------------------------------------
 def is_number(value) -> bool:
-    """A real number (Python's or NumPy's), not a bool and not a string."""
+    """A real number (Python's or NumPy's, a 0-d array too), not a bool and not a string."""
+    if getattr(value, "shape", None) == () and getattr(getattr(value, "dtype", None), "kind", "?") in "iuf":
+        return True                                       # a NumPy 0-d array of numbers
     return isinstance(value, numbers.Real) and not isinstance(value, bool) and type(value).__name__ != "bool_"
 
 
@@ -48,8 +50,7 @@ def is_whole(value) -> bool:
 def _bounds(gt, ge, lt, le) -> str:
     parts = [f"> {gt:g}" if gt is not None else "", f">= {ge:g}" if ge is not None else "",
              f"< {lt:g}" if lt is not None else "", f"<= {le:g}" if le is not None else ""]
-    parts = [p for p in parts if p]
-    return " and ".join(parts) if len(parts) < 2 else f"{parts[0]} and {parts[1]}"
+    return " and ".join(p for p in parts if p)
 
 
 def number(name: str, value, *, gt=None, ge=None, lt=None, le=None, whole: bool = False,
@@ -124,10 +125,13 @@ def newton_error(fields: dict) -> str | None:
     return None if bad is None else bad[1]
 
 
-def newton_field_error(fields: dict) -> tuple[str, str] | None:
-    """(the field, why) for the first of ``fields`` that cannot be used (:func:`newton_error`)."""
+def newton_field_error(fields: dict, unknown: bool = True) -> tuple[str, str] | None:
+    """(the field, why) for the first of ``fields`` that cannot be used (:func:`newton_error`);
+    ``unknown``: a name that is not a field is refused (a problem file's key), else passed over."""
     for name, value in fields.items():
         if name not in NEWTON_CHECKS:
+            if not unknown:
+                continue
             return name, f"unknown setting {name!r}; the settings are {', '.join(NEWTON_CHECKS)}"
         why = NEWTON_CHECKS[name](name, value)
         if why:

@@ -192,7 +192,7 @@ def _mesh(path: pathlib.Path, mesh) -> None:
             raise ProblemError(f"{where} file = {mesh['file']!r} does not exist: check the path")
         return
     b = mesh.get("builder") if isinstance(mesh, dict) else None
-    if b not in BUILDERS:
+    if not isinstance(b, str) or b not in BUILDERS:
         raise ProblemError(f"{where} builder = {b!r}: choose one of {', '.join(BUILDERS)} or "
                            "give file = \"part.msh\"")
     _check(where, mesh, {"builder": str, "order": int, **{k: float for k in BUILDERS[b]}}, required=BUILDERS[b])
@@ -241,7 +241,7 @@ def _items(path: pathlib.Path, items: list) -> dict:
     names = {}
     for k, item in enumerate(items, 1):
         kind = item.get("type") if isinstance(item, dict) else None
-        if kind not in ITEMS:
+        if not isinstance(kind, str) or kind not in ITEMS:
             raise ProblemError(f"{path}: [[items]] {k}: type = {kind!r}: choose one of {', '.join(ITEMS)}")
         where = f"{path}: [[items]] {k} ({kind})"
         _check(where, item, {"type": str, "name": str, **ITEMS[kind]},
@@ -262,7 +262,7 @@ def _contact(where: str, path: pathlib.Path, item: dict) -> None:
         raise ProblemError(f"{where}: relag = true re-solves the lagged law: give friction = \"lagged\" "
                            "or relag = false")
     obs = item["obstacle"]
-    if obs.get("type") not in OBSTACLES:
+    if not isinstance(obs.get("type"), str) or obs["type"] not in OBSTACLES:
         raise ProblemError(f"{where}: obstacle type = {obs.get('type')!r}: choose one of {', '.join(OBSTACLES)}")
     _check(f"{where} obstacle", obs, {"type": str, **OBSTACLES[obs["type"]]},
            required=[key for key in OBSTACLES[obs["type"]] if key not in OPTIONAL])
@@ -300,7 +300,7 @@ def _probes(path: pathlib.Path, probes: list, items: list, names: dict) -> None:
     contacts = [n for n, i in names.items() if items[i - 1]["type"] == "contact"]
     for k, probe in enumerate(probes, 1):
         kind = probe.get("type") if isinstance(probe, dict) else None
-        if kind not in PROBES:
+        if not isinstance(kind, str) or kind not in PROBES:
             raise ProblemError(f"{path}: [[probes]] {k}: type = {kind!r}: choose one of {', '.join(PROBES)}")
         where = f"{path}: [[probes]] {k} ({kind})"
         _check(where, probe, {"type": str, **PROBES[kind]},

@@ -91,6 +91,12 @@ def test_the_names_checked_early_are_those_implemented():
     assert set(updates.UPDATES) == set(names.UPDATES)
     assert set(materials.LAWS) == set(names.LAWS)
     assert set(kinematics.MODELS) == set(names.MODELS)
+    # every field of NewtonSettings has its check (a problem file's [newton] keys are those)
+    import dataclasses
+
+    from comove_dolfinx.checks import NEWTON_CHECKS
+    from comove_dolfinx.solver import NewtonSettings
+    assert set(NEWTON_CHECKS) == {f.name for f in dataclasses.fields(NewtonSettings)}
 
 
 BAD_EARLY = [("ring", "E=-1", "E = -1.0"), ("ring", "size=inf", "size = inf"), ("beam", "L=inf", "L = inf"),
@@ -221,6 +227,8 @@ BAD_KEYS = [
     ('item = "plate"', 'item = "fixed1"', "item = 'fixed1' is not a contact item; the contact items are plate"),
     ("[[steps]]\nn = 2\n", "", "give the steps as [[steps]] tables"),     # with steps = [] on top
     ("normal = [0.0, -1.0]", "normal = [0.0, 0.0]", "normal = [0, 0]: give a direction"),
+    ('builder = "rectangle"', 'builder = ["rectangle"]', "builder = ['rectangle']: choose one of rectangle"),
+    ('type = "fixed"', 'type = ["fixed"]', "[[items]] 1: type = ['fixed']: choose one of fixed"),
 ]
 
 

@@ -129,7 +129,7 @@ class NewtonSettings:
         """:class:`SettingsError` naming the first field that cannot be used and the fix
         (checks.newton_error: tolerances finite and >= 0, max_it a whole number >= 1, the names
         known, petsc_options a dict of names to values); a Newton checks its settings again."""
-        bad = newton_field_error({f.name: getattr(self, f.name) for f in fields(self)})
+        bad = newton_field_error({f.name: getattr(self, f.name) for f in fields(self)}, unknown=False)
         if bad is not None:
             error = SolverOptionError if bad[0] == "petsc_options" else SettingsError
             raise error(f"NewtonSettings: {bad[1]}")
