@@ -24,6 +24,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
     (["n_steps=ten"], ["n_steps", "int"]),
     (["predictor=secant"], ["predictor", "secant", "tangent"]),
     (["first=0.3"], ["first = 0.3", "0.5, 0.25"]),
+    (["nu=0.3", "nu=0.4"], ["--set nu is given twice", "nu=0.4"]),
 ])
 def test_bad_parameters(pairs, words):
     with pytest.raises((SceneError, MaterialError)) as err:
@@ -310,3 +311,11 @@ def test_too_fine_scene_mesh_refused_before_gmsh(tmp_path):
         get_scene("plate", ["size=1e-5"])
     get_scene("beam", ["size=1e-5", f"mesh={ROOT / 'tests' / 'meshes' / 'rectangle_65426506db.msh'}"])
 
+
+
+def test_a_one_row_hardening_table_is_read(tmp_path):
+    """A perfectly plastic J2 body has a hardening table of one row, [[0, sigma_y]]."""
+    from comove_dolfinx import problem
+    path = tmp_path / "p.toml"
+    path.write_text(PROBLEM.replace("E = 100.0, nu = 0.3", 'law = "j2", E = 100.0, nu = 0.3, hardening = [[0, 5.0]]'))
+    assert problem.read(path)["body"]["material"]["hardening"] == [[0, 5.0]]

@@ -88,6 +88,16 @@ def test_contact_values():
     assert cm.Contact("top", plane, theta=np.int64(1), mu=np.float64(0.2)).mu == 0.2
 
 
+def test_material_and_obstacle_values():
+    _refused(cm.MaterialError, lambda: cm.Elastic("100", 0.3), "E = '100'")
+    _refused(cm.MaterialError, lambda: cm.Elastic(100.0, True), "nu = True")
+    _refused(cm.MaterialError, lambda: cm.Hardening(["0"], ["2800"]), "strain = ['0']")
+    _refused(cm.ContactError, lambda: cm.Circle((0.0, 0.0), "1"), "radius = '1'")
+    _refused(cm.ContactError, lambda: cm.Plane(("0", "1"), (0.0, 1.0)), "point = ('0', '1')")
+    _refused(cm.ContactError, lambda: cm.Profile([0.0, 1.0, 2.0], 0.1), "points = [0.0, 1.0, 2.0]")
+    assert cm.Elastic(np.float64(100.0), np.array(0.3)).nu == 0.3
+
+
 def test_item_values():
     _refused(cm.ItemError, lambda: cm.Pressure("top", "1"), "'1'", "finite number")
     _refused(cm.ItemError, lambda: cm.Pressure("top", True), "True")
