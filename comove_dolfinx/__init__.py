@@ -31,7 +31,7 @@ _API = {
     "loads": ("Fixed", "Displacement", "Pressure", "Traction", "BodyForce", "PointLoad", "ItemError"),
     "contact": ("Contact", "Plane", "Circle", "Profile", "ContactError"),
     "job": ("Step", "Job", "Results", "JobError"),
-    "solver": ("NewtonSettings",),
+    "solver": ("NewtonSettings", "SettingsError"),
     "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "ContactPeak",
                "Reaction", "MaxPlasticStrain", "Value"),
     "io": ("Writer", "HistoryCSV", "VTK", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),

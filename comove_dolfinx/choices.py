@@ -13,6 +13,10 @@ CONTACT_METHODS = ("penalty", "nitsche")
 FRICTION_LAWS = ("coulomb", "lagged")        # the threshold: current pressure, or the last increment's
 PREDICTORS = {"none": False, "linear": 1, "quadratic": 2, "tangent": "tangent"}
 LAWS = ("j2", "chen")
+#: NewtonSettings.line_search: None (chosen from the items), True / "residual", "energy", False / "none"
+LINE_SEARCHES = (None, True, False, "residual", "energy", "none")
+#: NewtonSettings.scale: what rtol is relative to (solver/newton.py)
+CONVERGENCE_SCALES = ("initial", "force")
 
 
 def first_increment_error(first, max_cutbacks: int) -> str | None:

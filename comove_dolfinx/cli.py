@@ -71,6 +71,7 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
 
 
 def _errors():
+    from .checks import SettingsError
     from .contact import ContactError
     from .geometry import MeshError
     from .io.checkpoint import CheckpointError
@@ -82,7 +83,7 @@ def _errors():
     from .presets import SceneError
     from .probes import ProbeError
     return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError,
-            FolderError, CheckpointError)
+            FolderError, CheckpointError, SettingsError)
 
 
 def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: bool = False,

@@ -35,6 +35,7 @@ from tqdm import tqdm
 from .deprecated import warn_renamed
 from .guards import PENETRATION_WARNING, check_workspace
 from .loop import IncrementLoop
+from .checks import check_job
 from .mechanics.model import Model
 from .parallel import Interrupts, collective
 from .process import _CompilerLines, account, process_clock, quiet_compilers  # noqa: F401 - importable here
@@ -47,12 +48,19 @@ __all__ = ["Job", "JobError", "Results", "RunState", "Step", "process_clock", "q
 
 
 class Job:
-    """A body, its items, the steps, the probes and the writers (see the module docstring)."""
+    """A body, its items, the steps, the probes and the writers (see the module docstring).
 
-    def __init__(self, body, items=(), steps=(), probes=(), writers=(), newton: NewtonSettings | None = None,
+    ``items``, ``probes`` and ``writers`` are lists, ``steps`` a non-empty list of :class:`Step`
+    (left out: one ``Step()``). A single item where a list belongs is refused, with the fix "pass
+    [item]", and so is an empty list of steps or a probe of a contact that is not one of the items
+    (checks.check_job: :class:`JobError`, ``ProbeError``).
+    """
+
+    def __init__(self, body, items=(), steps=None, probes=(), writers=(), newton: NewtonSettings | None = None,
                  load: Callable[[float], float] | None = None, form_options: dict | None = None):
+        check_job(body, items, steps, probes, writers, newton, load)
         self.body, self.items = body, list(items)
-        self.steps = list(steps) or [Step()]
+        self.steps = [Step()] if steps is None else list(steps)
         self.probes, self.writers = list(probes), list(writers)
         self.newton, self.load, self.form_options = newton or NewtonSettings(), load, form_options
         for s in self.steps:

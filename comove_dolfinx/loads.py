@@ -15,7 +15,16 @@ from petsc4py import PETSc
 from .mechanics.items import Item, ItemError
 from .mechanics.items import finite as _finite
 
+from .checks import choice, text
+
 __all__ = ["BodyForce", "Displacement", "Fixed", "Item", "ItemError", "PointLoad", "Pressure", "Traction"]
+
+
+def _boundary(boundary) -> None:
+    """ItemError unless ``boundary`` is a boundary's name."""
+    why = text("boundary", boundary, "the name of a tagged boundary, e.g. 'left'")
+    if why:
+        raise ItemError(why)
 
 
 class Displacement(Item):
@@ -27,8 +36,11 @@ class Displacement(Item):
 
     def __init__(self, boundary: str, value=None, component: int | None = None, field=None):
         super().__init__(boundary)
-        if component not in (None, 0, 1):
+        _boundary(boundary)
+        if choice("component", component, (None, 0, 1)):
             raise ItemError(f"component = {component!r}: use 0 (x), 1 (y) or None (both)")
+        if field is not None and not callable(field):
+            raise ItemError(f"boundary {boundary!r}: field = {field!r}: give a function field(x, factor)")
         if value is not None and field is not None:
             raise ItemError(f"boundary {boundary!r}: give a value or a field, not both")
         self.boundary, self.component, self.field = boundary, component, field
@@ -130,6 +142,7 @@ class Pressure(Item):
 
     def __init__(self, boundary: str, p: float):
         super().__init__(boundary)
+        _boundary(boundary)
         self.boundary, self.p = boundary, float(_finite(f"pressure on {boundary!r}", p))
 
     def attach(self, ctx):
@@ -150,6 +163,7 @@ class Traction(Item):
 
     def __init__(self, boundary: str, vector):
         super().__init__(boundary)
+        _boundary(boundary)
         self.boundary, self.traction = boundary, _finite(f"traction on {boundary!r}", vector, (2,))
 
     def attach(self, ctx):
@@ -165,6 +179,8 @@ class BodyForce(Item):
 
     def __init__(self, vector, name: str = "body_force"):
         super().__init__(name)
+        if text("name", name):
+            raise ItemError(text("name", name))
         self.force = _finite("body force", vector, (2,))
 
     def attach(self, ctx):
@@ -183,6 +199,8 @@ class PointLoad(Item):
 
     def __init__(self, point, vector, name: str = "point_load"):
         super().__init__(name)
+        if text("name", name):
+            raise ItemError(text("name", name))
         self.point = _finite("point of the load", point, (2,))
         self.force = _finite("point load", vector, (2,))
 

@@ -22,9 +22,47 @@ from typing import Callable
 import numpy as np
 from mpi4py import MPI
 
+from .checks import choice, first, number, text
+
 
 class ProbeError(ValueError):
     """A probe that cannot be placed (the message names the value and the fix)."""
+
+
+def _refuse(*messages) -> None:
+    """ProbeError with the first message that is not None (checks.py's messages)."""
+    why = first(*messages)
+    if why is not None:
+        raise ProbeError(why)
+
+
+def _contact_of(probe: str, contact):
+    """``contact`` if it is a contact item or None (a job refuses a probe of no contact:
+    :func:`check_contacts`), else ProbeError naming the probe."""
+    if contact is not None and (getattr(contact, "kind", None) != "contact"
+                                or not callable(getattr(contact, "zone", None))):
+        raise ProbeError(f"{probe}: contact = {contact!r}: give the Contact item itself (the one in the "
+                         "job's items), not its name")
+    return contact
+
+
+def check_contacts(probes, items) -> None:
+    """ProbeError naming the first probe that reads a contact which is not one of ``items`` (it would
+    read a contact that the job never builds)."""
+    for probe in probes:
+        if not isinstance(probe, (ContactForce, ContactLength, ContactEdges, ContactPeak)):
+            continue
+        contact, name = probe.contact, f"{type(probe).__name__} {probe.columns[0]!r}"
+        if contact is None:
+            raise ProbeError(f"{name}: contact = None: give it the Contact item it reads (one of the job's items)")
+        if not any(contact is item for item in items):
+            raise ProbeError(f"{name} reads the contact on boundary "
+                             f"{getattr(contact, 'boundary', contact)!r}, which is not one of the job's items: "
+                             "add that Contact to the items, or probe one that is")
+
+
+def _columns(name: str, scale) -> None:
+    _refuse(text("name", name, "the history's column name"), number("scale", scale))
 
 
 class Probe:
@@ -43,6 +81,11 @@ class NodeDisplacement(Probe):
 
     def __init__(self, name: str, point, component: int | None = None, column: str | None = None,
                  tol: float = 1e-8):
+        _refuse(text("name", name), choice("component", component, (None, 0, 1), " (0: x, 1: y, None: both)"),
+                None if column is None else text("column", column), number("tol", tol, gt=0))
+        ok = isinstance(point, (list, tuple, np.ndarray)) and len(point) == 2 and \
+            all(number("", v) is None for v in point)
+        _refuse(None if ok else f"probe {name!r}: point = {point!r}: give two finite numbers (x, y)")
         self.name, self.point, self.component, self.tol = name, np.asarray(point, float), component, tol
         if component is None:
             self.columns = (f"{name}_ux", f"{name}_uy")
@@ -81,7 +124,9 @@ class ContactForce(Probe):
     column ``name``), or both components (``<name>_fx``, ``<name>_fy``)."""
 
     def __init__(self, contact, name: str = "contact_force", component: int | None = 1, scale: float = 1.0):
-        self.contact, self.component, self.scale = contact, component, scale
+        _columns(name, scale)
+        _refuse(choice("component", component, (None, 0, 1), " (0: x, 1: y, None: both)"))
+        self.contact, self.component, self.scale = _contact_of(f"ContactForce {name!r}", contact), component, scale
         self.columns = (name,) if component is not None else (f"{name}_fx", f"{name}_fy")
 
     def __call__(self, model) -> dict:
@@ -99,7 +144,8 @@ class ContactLength(Probe):
     "Contact results"."""
 
     def __init__(self, contact, name: str = "contact_length", scale: float = 1.0):
-        self.contact, self.scale, self.columns = contact, scale, (name,)
+        _columns(name, scale)
+        self.contact, self.scale, self.columns = _contact_of(f"ContactLength {name!r}", contact), scale, (name,)
 
     def __call__(self, model) -> dict:
         return {self.columns[0]: self.scale * self.contact.zone().extent}
@@ -112,7 +158,8 @@ class ContactEdges(Probe):
     or the boundary's end)."""
 
     def __init__(self, contact, name: str = "contact_edge", axis: int = 0):
-        self.contact, self.axis = contact, axis
+        _refuse(text("name", name), choice("axis", axis, (0, 1), " (0: x, 1: y)"))
+        self.contact, self.axis = _contact_of(f"ContactEdges {name!r}", contact), axis
         self.columns = (f"{name}_min", f"{name}_max")
 
     def __call__(self, model) -> dict:
@@ -125,7 +172,8 @@ class ContactPeak(Probe):
     contact). Accuracy against Hertz's peak: docs/api.md, "Contact results"."""
 
     def __init__(self, contact, name: str = "peak_pressure", scale: float = 1.0):
-        self.contact, self.scale, self.columns = contact, scale, (name,)
+        _columns(name, scale)
+        self.contact, self.scale, self.columns = _contact_of(f"ContactPeak {name!r}", contact), scale, (name,)
 
     def __call__(self, model) -> dict:
         return {self.columns[0]: self.scale * self.contact.peak_pressure()}
@@ -138,6 +186,7 @@ class Reaction(Probe):
     boundary's support, is that support's; Model.reaction_forces). Zero once a step released them."""
 
     def __init__(self, boundary: str, name: str | None = None):
+        _refuse(text("boundary", boundary), None if name is None else text("name", name))
         self.boundary = boundary
         name = name or boundary
         self.columns = (f"{name}_fx", f"{name}_fy")
@@ -166,6 +215,8 @@ class Value(Probe):
     """A column computed by ``fn(model)`` (it must return the same number on every rank)."""
 
     def __init__(self, name: str, fn: Callable):
+        _refuse(text("name", name), None if callable(fn) else f"Value {name!r}: fn = {fn!r}: give a function "
+                "of the model")
         self.columns, self.fn = (name,), fn
 
     def __call__(self, model) -> dict:

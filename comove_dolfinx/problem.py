@@ -40,8 +40,12 @@
     column = "force"
     scale = -2.0
 
-Everything is checked here, before dolfinx is imported: a bad file gets one line that names the key
-(``[[items]] 2 (contact): mu = -1 ...``) and the fix. Paths are relative to the problem file.
+Everything is checked here, before dolfinx is imported: every key's type and range (RANGES, the
+``NewtonSettings`` fields through checks.newton_error, the material through ``Elastic`` and
+``Hardening``), the builder's sizes in their order and the number of cells they would make
+(checks.mesh_size_error), and the names the steps and probes refer to. A bad file gets one line that
+names the key (``[[items]] 2 (contact): mu = -1 ...``) and the fix. Paths are relative to the problem
+file.
 """
 from __future__ import annotations
 
@@ -49,7 +53,10 @@ import math
 import pathlib
 import tomllib
 
-from .choices import first_increment_error
+from .checks import choice, mesh_size_error, newton_error, number, text
+from .mechanics.material_data import Elastic, Hardening, MaterialError
+from .choices import (CONTACT_METHODS, FRICTION_LAWS, MODELS, PLASTIC_UPDATES, PREDICTORS, UPDATES,
+                    first_increment_error)
 
 
 class ProblemError(ValueError):
@@ -66,7 +73,9 @@ ITEMS = {"fixed": {"boundary": str, "component": int},
          "body_force": {"vector": "vector"},
          "point_load": {"point": "vector", "vector": "vector"},
          "contact": {"boundary": str, "obstacle": dict, "method": str, "gamma0": float, "theta": int,
-                     "mu": float, "relag": bool, "friction": str, "gamma0_t": float}}
+                     "mu": float, "relag": bool, "friction": str, "gamma0_t": float, "max_passes": int,
+                     "relag_tol": float}}
+REQUIRED = ("boundary", "p", "vector", "point", "obstacle", "value")
 OBSTACLES = {"plane": {"point": "vector", "normal": "vector", "motion": "vector"},
              "circle": {"centre": "vector", "radius": float, "motion": "vector"},
              "profile": {"points": "points", "radius": float, "motion": "vector"},
@@ -78,49 +87,77 @@ PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": s
           "contact_peak": {"item": str, "column": str, "scale": float},
           "reaction": {"boundary": str, "name": str},
           "max_plastic_strain": {}}
-NEWTON = {"rtol": float, "atol": float, "stol": float, "max_it": int, "divergence": float, "backtracks": int,
-          "free_its": int, "line_search": str, "energy_eta": float, "scale": str, "petsc_options": dict}
 SECTIONS = {"mesh", "body", "items", "steps", "newton", "probes"}
+LAWS = ("elastic", "j2", "chen")
+
+
+def _positive(key, value):
+    return number(key, value, gt=0)
+
+
+#: the values a key may take, wherever it stands (its type is checked first): the message or None
+RANGES = {
+    "kind": lambda k, v: choice(k, v, MODELS), "update": lambda k, v: choice(k, v, UPDATES),
+    "degree": lambda k, v: choice(k, v, (1, 2)), "order": lambda k, v: choice(k, v, (1, 2)),
+    "law": lambda k, v: choice(k, v, LAWS), "component": lambda k, v: choice(k, v, (0, 1), " (0: x, 1: y)"),
+    "thickness": _positive, "gamma0": _positive, "gamma0_t": _positive, "radius": _positive,
+    "spacing": _positive, "relag_tol": _positive,
+    "mu": lambda k, v: number(k, v, ge=0, what=" (the friction coefficient)"),
+    "theta": lambda k, v: choice(k, v, (1, 0, -1), " (Nitsche's variant)"),
+    "method": lambda k, v: choice(k, v, CONTACT_METHODS), "friction": lambda k, v: choice(k, v, FRICTION_LAWS),
+    "max_passes": lambda k, v: number(k, v, ge=1, whole=True),
+    "n": lambda k, v: number(k, v, ge=1, le=1_000_000, whole=True, what=" of increments"),
+    "predictor": lambda k, v: choice(k, v, tuple(PREDICTORS)),
+    "max_cutbacks": lambda k, v: number(k, v, ge=0, le=30, whole=True),
+    **{k: (lambda k, v: text(k, v)) for k in ("name", "boundary", "column", "item", "curve", "file")},
+}
+WANT = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false", dict: "a table",
+        list: "a list of item names", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
+        "vector|number": "a finite number or [x, y]", "names": "a list of names",
+        "table": "rows [strain, stress]: [[0, sigma_y], ...]"}
+
+
+def _real(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _typed(kind, value) -> bool:
+    """Whether ``value`` is of the kind ``kind`` of a spec (a type or a word of WANT)."""
+    if kind is float:
+        return _real(value)
+    if kind is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    if kind in (str, bool, dict):
+        return isinstance(value, kind)
+    if kind in (list, "names"):
+        return isinstance(value, list) and all(isinstance(v, str) for v in value)
+    if kind in ("vector", "vector|number"):
+        return (isinstance(value, list) and len(value) == 2 and all(_real(v) for v in value)) or (
+            kind == "vector|number" and _real(value))
+    return isinstance(value, list) and len(value) >= (2 if kind == "points" else 1) and all(   # points, table
+        isinstance(p, list) and len(p) == 2 and all(_real(v) for v in p) for p in value)
 
 
 def _check(where: str, table: dict, spec: dict, required=()) -> dict:
-    """Keys of ``table`` against ``spec`` (key -> type), values finite; returns the table."""
+    """Keys of ``table`` against ``spec`` (key -> type), then against RANGES; returns the table."""
     if not isinstance(table, dict):
         raise ProblemError(f"{where}: expected a table of keys, got {table!r}")
     for key, value in table.items():
         if key not in spec:
             raise ProblemError(f"{where}: unknown key {key!r}; the keys are {', '.join(spec) or 'none'}")
-        kind = spec[key]
-        ok = True
-        if kind is float:
-            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-        elif kind is int:
-            ok = isinstance(value, int) and not isinstance(value, bool)
-        elif kind in (str, bool, dict, list):
-            ok = isinstance(value, kind)
-        elif kind in ("vector", "vector|number"):
-            ok = (isinstance(value, list) and len(value) == 2 and all(
-                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value))
-            if kind == "vector|number" and not ok:
-                ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-        elif kind == "points":
-            ok = isinstance(value, list) and len(value) >= 2 and all(
-                isinstance(p, list) and len(p) == 2 and all(isinstance(v, (int, float)) and math.isfinite(v)
-                                                            for v in p) for p in value)
-        if not ok:
-            want = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false",
-                    dict: "a table", list: "a list of item names", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
-                    "vector|number": "a finite number or [x, y]"}[kind]
-            raise ProblemError(f"{where}: {key} = {value!r}: give {want}")
+        if not _typed(spec[key], value):
+            raise ProblemError(f"{where}: {key} = {value!r}: give {WANT[spec[key]]}")
+        why = RANGES[key](key, value) if key in RANGES else None
+        if why is not None:
+            raise ProblemError(f"{where}: {why}")
     for key in required:
         if key not in table:
             raise ProblemError(f"{where}: {key} is missing: add it")
     return table
 
 
-def read(path) -> dict:
-    """Parse and check a problem file; returns its tables (nothing heavy is imported)."""
-    path = pathlib.Path(path)
+def _load(path: pathlib.Path) -> dict:
+    """The file's tables, with only known sections."""
     if not path.is_file():
         raise ProblemError(f"{path}: no such problem file: check the path")
     try:
@@ -131,100 +168,173 @@ def read(path) -> dict:
     if unknown:
         raise ProblemError(f"{path}: unknown section {sorted(unknown)[0]!r}; the sections are "
                            f"{', '.join(sorted(SECTIONS))}")
-    def need(key):
-        if key not in data:
-            raise ProblemError(f"{path}: the [{key}] section is missing: add it")
+    return data
 
-    need("mesh")
-    mesh = data["mesh"]
-    if "file" in mesh:
-        _check(f"{path}: [mesh]", mesh, {"file": str, "tags": list})
+
+def _need(path: pathlib.Path, data: dict, key: str):
+    """The section ``key``; [[items]] and [[steps]] non-empty lists of tables, [[probes]] a list."""
+    if key not in data and key in ("mesh", "body", "items"):
+        raise ProblemError(f"{path}: the [{key}] section is missing: add it")
+    value = data.get(key, [])
+    if key in ("items", "steps", "probes") and (not isinstance(value, list) or (not value and key != "probes")):
+        raise ProblemError(f"{path}: give the {key} as [[{key}]] tables"
+                           + (" (or leave them out)" if key != "items" else ""))
+    return value
+
+
+def _mesh(path: pathlib.Path, mesh) -> None:
+    """[mesh]: a file with tags, or a builder with positive sizes in their order and not too fine."""
+    where = f"{path}: [mesh]"
+    if isinstance(mesh, dict) and "file" in mesh:
+        _check(where, mesh, {"file": str, "tags": "names"})
         mesh["file"] = str((path.parent / mesh["file"]).resolve())
         if not pathlib.Path(mesh["file"]).is_file():
-            raise ProblemError(f"{path}: [mesh] file = {mesh['file']!r} does not exist: check the path")
-    else:
-        b = mesh.get("builder")
-        if b not in BUILDERS:
-            raise ProblemError(f"{path}: [mesh] builder = {b!r}: choose one of {', '.join(BUILDERS)} or "
-                               "give file = \"part.msh\"")
-        spec = {"builder": str, "order": int, **{k: float for k in BUILDERS[b]}}
-        _check(f"{path}: [mesh]", mesh, spec, required=BUILDERS[b])
-        for k in BUILDERS[b]:
-            if mesh[k] <= 0 and k != "z_support":
-                raise ProblemError(f"{path}: [mesh] {k} = {mesh[k]}: give a number > 0")
-    need("body")
-    body = _check(f"{path}: [body]", data["body"], {"kind": str, "update": str, "degree": int, "thickness": float,
-                                                    "material": dict}, required=("kind", "material"))
-    mat = _check(f"{path}: [body] material", body["material"],
-                 {"law": str, "E": float, "nu": float, "hardening": "points"}, required=("E", "nu"))
+            raise ProblemError(f"{where} file = {mesh['file']!r} does not exist: check the path")
+        return
+    b = mesh.get("builder") if isinstance(mesh, dict) else None
+    if not isinstance(b, str) or b not in BUILDERS:
+        raise ProblemError(f"{where} builder = {b!r}: choose one of {', '.join(BUILDERS)} or "
+                           "give file = \"part.msh\"")
+    _check(where, mesh, {"builder": str, "order": int, **{k: float for k in BUILDERS[b]}}, required=BUILDERS[b])
+    for k in BUILDERS[b]:
+        if mesh[k] <= 0:
+            raise ProblemError(f"{where} {k} = {mesh[k]}: give a number > 0")
+    pair = {"annulus_sector": ("r_in", "r_out"), "plate_section": ("z_support", "t"),
+            "quarter_disc": ("size_contact", "size")}.get(b)
+    if pair:
+        (a, lo), (c, hi) = ((k, mesh[k]) for k in pair)
+        strict = b != "quarter_disc"
+        if lo > hi or (strict and lo == hi):
+            raise ProblemError(f"{where} {a} = {lo}, {c} = {hi}: {a} must be {'<' if strict else '<='} {c}")
+    why = mesh_size_error(b, mesh)
+    if why is not None:
+        raise ProblemError(f"{where} {why}")
+
+
+def _body(path: pathlib.Path, body) -> None:
+    """[body] and its material: the names known, E and nu and the hardening table usable."""
+    where = f"{path}: [body]"
+    _check(where, body, {"kind": str, "update": str, "degree": int, "thickness": float, "material": dict},
+           required=("kind", "material"))
+    mat = _check(f"{where} material", body["material"], {"law": str, "E": float, "nu": float,
+                                                        "hardening": "table"}, required=("E", "nu"))
     law = mat.get("law", "elastic")
-    if law not in ("elastic", "j2", "chen"):
-        raise ProblemError(f"{path}: [body] material law = {law!r}: choose elastic, j2 or chen")
+    try:
+        Elastic(mat["E"], mat["nu"])
+        if "hardening" in mat:
+            Hardening([p for p, _ in mat["hardening"]], [s for _, s in mat["hardening"]])
+    except MaterialError as err:
+        raise ProblemError(f"{where} material: {err}") from None
     if law != "elastic" and "hardening" not in mat:
-        raise ProblemError(f"{path}: [body] material: a {law} material needs hardening = [[0, sigma_y], ...]")
+        raise ProblemError(f"{where} material: a {law} material needs hardening = [[0, sigma_y], ...]")
+    if law == "elastic" and "hardening" in mat:
+        raise ProblemError(f"{where} material: hardening is for law = \"j2\" or \"chen\": give the law "
+                           "or remove the table")
+    update = body.get("update", "sr_log")
+    if law != "elastic" and update not in PLASTIC_UPDATES:
+        raise ProblemError(f"{where} update = {update!r} cannot carry plasticity: choose one of "
+                           f"{', '.join(PLASTIC_UPDATES)}")
+
+
+def _items(path: pathlib.Path, items: list) -> dict:
+    """[[items]]: each of a known type with its keys; their names (name -> position from 1)."""
     names = {}
-    need("items")
-    if not isinstance(data["items"], list) or not data["items"]:
-        raise ProblemError(f"{path}: give the items as [[items]] tables")
-    for k, item in enumerate(data["items"], 1):
+    for k, item in enumerate(items, 1):
         kind = item.get("type") if isinstance(item, dict) else None
-        if kind not in ITEMS:
+        if not isinstance(kind, str) or kind not in ITEMS:
             raise ProblemError(f"{path}: [[items]] {k}: type = {kind!r}: choose one of {', '.join(ITEMS)}")
         where = f"{path}: [[items]] {k} ({kind})"
         _check(where, item, {"type": str, "name": str, **ITEMS[kind]},
-               required=[key for key in ITEMS[kind] if key in ("boundary", "p", "vector", "point", "obstacle")])
+               required=[key for key in ITEMS[kind] if key in REQUIRED])
         if kind == "contact":
-            obs = item["obstacle"]
-            if obs.get("type") not in OBSTACLES:
-                raise ProblemError(f"{where}: obstacle type = {obs.get('type')!r}: choose one of "
-                                   f"{', '.join(OBSTACLES)}")
-            _check(f"{where} obstacle", obs, {"type": str, **OBSTACLES[obs["type"]]},
-                   required=[key for key in OBSTACLES[obs["type"]] if key not in OPTIONAL])
-            if "file" in obs:
-                obs["file"] = str((path.parent / obs["file"]).resolve())
-                if not pathlib.Path(obs["file"]).is_file():
-                    raise ProblemError(f"{where} obstacle: file = {obs['file']!r} does not exist: check the path")
+            _contact(where, path, item)
         name = item.get("name", f"{kind}{k}")
         if name in names:
             raise ProblemError(f"{where}: the name {name!r} is taken by item {names[name]}: rename one")
         names[name] = k
         item["name"] = name
-    steps = data.get("steps", [{}])
-    for k, step in enumerate(steps, 1):
-        _check(f"{path}: [[steps]] {k}", step, {"n": int, "predictor": str, "max_cutbacks": int, "ramp": dict,
-                                                "name": str, "release": list, "first": float, "retry": bool})
+    return names
+
+
+def _contact(where: str, path: pathlib.Path, item: dict) -> None:
+    """A contact item's obstacle, and relag only with the lagged law."""
+    if item.get("relag") and item.get("friction", "lagged") != "lagged":
+        raise ProblemError(f"{where}: relag = true re-solves the lagged law: give friction = \"lagged\" "
+                           "or relag = false")
+    obs = item["obstacle"]
+    if not isinstance(obs.get("type"), str) or obs["type"] not in OBSTACLES:
+        raise ProblemError(f"{where}: obstacle type = {obs.get('type')!r}: choose one of {', '.join(OBSTACLES)}")
+    _check(f"{where} obstacle", obs, {"type": str, **OBSTACLES[obs["type"]]},
+           required=[key for key in OBSTACLES[obs["type"]] if key not in OPTIONAL])
+    if obs["type"] == "plane" and obs["normal"] == [0, 0]:
+        raise ProblemError(f"{where} obstacle: normal = [0, 0]: give a direction towards the body")
+    if "file" in obs:
+        obs["file"] = str((path.parent / obs["file"]).resolve())
+        if not pathlib.Path(obs["file"]).is_file():
+            raise ProblemError(f"{where} obstacle: file = {obs['file']!r} does not exist: check the path")
+
+
+def _steps(path: pathlib.Path, data: dict, names: dict) -> None:
+    """[[steps]] (one default step if none): their keys, and the items they ramp or release."""
+    data.setdefault("steps", [{}])
+    supports = [n for n, i in names.items() if data["items"][i - 1]["type"] in ("fixed", "displacement")]
+    for k, step in enumerate(data["steps"], 1):
+        where = f"{path}: [[steps]] {k}"
+        _check(where, step, {"n": int, "predictor": str, "max_cutbacks": int, "ramp": dict, "name": str,
+                             "release": "names", "first": float, "retry": bool})
         why = first_increment_error(step.get("first", 1.0), step.get("max_cutbacks", 6))
         if why:
-            raise ProblemError(f"{path}: [[steps]] {k}: {why}")
-        supports = [n for n, i in names.items() if data["items"][i - 1]["type"] in ("fixed", "displacement")]
+            raise ProblemError(f"{where}: {why}")
         for key in step.get("release", []):
             if key not in supports:
-                raise ProblemError(f"{path}: [[steps]] {k} release: {key!r} is not a support item; the supports "
+                raise ProblemError(f"{where} release: {key!r} is not a support item; the supports "
                                    f"are {', '.join(supports) or 'none'}")
         for key, target in step.get("ramp", {}).items():
             if key not in names:
-                raise ProblemError(f"{path}: [[steps]] {k} ramp: no item named {key!r}; the items are "
-                                   f"{', '.join(names)}")
-            _check(f"{path}: [[steps]] {k} ramp", {key: target}, {key: float})
-    data["steps"] = steps
-    _check(f"{path}: [newton]", data.get("newton", {}), NEWTON)
-    for k, probe in enumerate(data.get("probes", []), 1):
+                raise ProblemError(f"{where} ramp: no item named {key!r}; the items are {', '.join(names)}")
+            _check(f"{where} ramp", {key: target}, {key: float})
+
+
+def _probes(path: pathlib.Path, probes: list, items: list, names: dict) -> None:
+    """[[probes]]: each of a known type; a contact probe names a contact item."""
+    contacts = [n for n, i in names.items() if items[i - 1]["type"] == "contact"]
+    for k, probe in enumerate(probes, 1):
         kind = probe.get("type") if isinstance(probe, dict) else None
-        if kind not in PROBES:
+        if not isinstance(kind, str) or kind not in PROBES:
             raise ProblemError(f"{path}: [[probes]] {k}: type = {kind!r}: choose one of {', '.join(PROBES)}")
-        _check(f"{path}: [[probes]] {k} ({kind})", probe, {"type": str, **PROBES[kind]})
-        if "item" in probe and probe["item"] not in names:
-            raise ProblemError(f"{path}: [[probes]] {k}: no item named {probe['item']!r}")
+        where = f"{path}: [[probes]] {k} ({kind})"
+        _check(where, probe, {"type": str, **PROBES[kind]},
+               required=[key for key in ("item", "point", "boundary") if key in PROBES[kind]])
+        if "item" in probe and probe["item"] not in contacts:
+            raise ProblemError(f"{where}: item = {probe['item']!r} is not a contact item; the contact items "
+                               f"are {', '.join(contacts) or 'none'}")
+
+
+def read(path) -> dict:
+    """Parse and check a problem file; returns its tables (nothing heavy is imported)."""
+    path = pathlib.Path(path)
+    data = _load(path)
+    _mesh(path, _need(path, data, "mesh"))
+    _body(path, _need(path, data, "body"))
+    names = _items(path, _need(path, data, "items"))
+    if "steps" in data:
+        _need(path, data, "steps")
+    _steps(path, data, names)
+    newton = data.get("newton", {})
+    why = newton_error(newton) if isinstance(newton, dict) else f"expected a table of keys, got {newton!r}"
+    if why is None and "monitor" in newton:
+        why = "monitor: an observer is a Python object; run the problem from Python to give one"
+    if why is not None:
+        raise ProblemError(f"{path}: [newton] {why}")
+    _probes(path, _need(path, data, "probes"), data["items"], names)
     return data
 
 
 def build(data: dict, comm, writers=()):
     """The :class:`Job` of a checked problem (imports dolfinx)."""
-    from . import contact as c
-    from . import geometry, loads, probes
+    from . import geometry
     from .job import Job, Step
     from .mechanics.body import Body
-    from .mechanics.material_data import Hardening
     from .mechanics.materials import as_material
     from .solver import NewtonSettings
 
@@ -232,57 +342,55 @@ def build(data: dict, comm, writers=()):
     if "file" in mesh:
         md = geometry.load_msh(mesh["file"], comm, required=mesh.get("tags", ()))
     else:
-        builder = getattr(geometry, mesh.pop("builder"))
-        md = builder(**mesh, comm=comm)
-    b = data["body"]
-    m = b["material"]
+        md = getattr(geometry, mesh.pop("builder"))(**mesh, comm=comm)
+    b, m = data["body"], data["body"]["material"]
     table = m.get("hardening")
     hard = Hardening([p for p, _ in table], [s for _, s in table]) if table else None
     law = m.get("law", "elastic")
     material = as_material(m["E"], m["nu"], None if law == "elastic" else law, hard)
     body = Body(md, b["kind"], material, update=b.get("update", "sr_log"), degree=b.get("degree", 2),
                 thickness=b.get("thickness", 1.0))
-    named = {}
-    for spec in data["items"]:
-        s = dict(spec)
-        kind, name = s.pop("type"), s.pop("name")
-        if kind == "contact":
-            o = dict(s.pop("obstacle"))
-            otype = o.pop("type")
-            if "file" in o:
-                o["path"] = o.pop("file")
-            obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile,
-                        "gmsh_profile": c.Profile.from_gmsh}[otype](**o)
-            item = c.Contact(s.pop("boundary"), obstacle, **s)
-        else:
-            cls = {"fixed": loads.Fixed, "displacement": loads.Displacement, "pressure": loads.Pressure,
-                   "traction": loads.Traction, "body_force": loads.BodyForce, "point_load": loads.PointLoad}[kind]
-            item = cls(**s)
-        named[name] = item
+    named = {spec["name"]: _item(spec) for spec in data["items"]}
     steps = [Step(st.get("n", 10), ramp={named[k]: v for k, v in st["ramp"].items()} if "ramp" in st else None,
                   predictor=st.get("predictor", Step.predictor), max_cutbacks=st.get("max_cutbacks", 6),
                   name=st.get("name", ""), release=[named[k] for k in st.get("release", [])],
                   first=st.get("first", 1.0), retry=st.get("retry", Step.retry))
              for st in data["steps"]]
-    plist = []
-    for spec in data.get("probes", []):
-        s = dict(spec)
-        kind = s.pop("type")
-        if kind == "node":
-            plist.append(probes.NodeDisplacement(s.get("name", "node"), s["point"], s.get("component"),
-                                                 s.get("column")))
-        elif kind == "contact_force":
-            plist.append(probes.ContactForce(named[s["item"]], s.get("column", "contact_force"),
-                                             s.get("component", 1), s.get("scale", 1.0)))
-        elif kind == "contact_length":
-            plist.append(probes.ContactLength(named[s["item"]], s.get("column", "contact_length"),
-                                              s.get("scale", 1.0)))
-        elif kind == "contact_peak":
-            plist.append(probes.ContactPeak(named[s["item"]], s.get("column", "peak_pressure"),
-                                            s.get("scale", 1.0)))
-        elif kind == "reaction":
-            plist.append(probes.Reaction(s["boundary"], s.get("name")))
-        else:
-            plist.append(probes.MaxPlasticStrain())
+    plist = [_probe(spec, named) for spec in data.get("probes", [])]
     newton = NewtonSettings(**data.get("newton", {}))
     return Job(body, list(named.values()), steps, plist, writers, newton=newton)
+
+
+def _item(spec: dict):
+    """The item of a checked [[items]] table."""
+    from . import contact as c
+    from . import loads
+    s = dict(spec)
+    kind, _ = s.pop("type"), s.pop("name")
+    if kind != "contact":
+        return {"fixed": loads.Fixed, "displacement": loads.Displacement, "pressure": loads.Pressure,
+                "traction": loads.Traction, "body_force": loads.BodyForce, "point_load": loads.PointLoad}[kind](**s)
+    o = dict(s.pop("obstacle"))
+    otype = o.pop("type")
+    if "file" in o:
+        o["path"] = o.pop("file")
+    obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile,
+                "gmsh_profile": c.Profile.from_gmsh}[otype](**o)
+    return c.Contact(s.pop("boundary"), obstacle, **s)
+
+
+def _probe(s: dict, named: dict):
+    """The probe of a checked [[probes]] table (``named``: the items by name)."""
+    from . import probes
+    kind, scale = s["type"], s.get("scale", 1.0)
+    if kind == "node":
+        return probes.NodeDisplacement(s.get("name", "node"), s["point"], s.get("component"), s.get("column"))
+    if kind == "contact_force":
+        return probes.ContactForce(named[s["item"]], s.get("column", "contact_force"), s.get("component", 1), scale)
+    if kind == "contact_length":
+        return probes.ContactLength(named[s["item"]], s.get("column", "contact_length"), scale)
+    if kind == "contact_peak":
+        return probes.ContactPeak(named[s["item"]], s.get("column", "peak_pressure"), scale)
+    if kind == "reaction":
+        return probes.Reaction(s["boundary"], s.get("name"))
+    return probes.MaxPlasticStrain()

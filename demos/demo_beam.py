@@ -45,8 +45,10 @@ items = [cm.Fixed("left"), cm.Pressure("top", q), foundation]
 probes = [cm.NodeDisplacement("tip", (L, 0.0)), cm.ContactLength(foundation),
           cm.ContactForce(foundation, "contact_force", component=1)]
 snaps = cm.Snapshots([0.05 * q, 0.25 * q, 0.5 * q, q])
+# overwrite=True: a second run into the same folder replaces the datasets of the first (the VTK
+# writer refuses a folder holding another run's datasets otherwise)
 job = cm.Job(body, items, [cm.Step(20)], probes, load=lambda t: q * t,     # load column: q
-             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv"), snaps])
+             writers=[cm.VTK(out, overwrite=True), cm.HistoryCSV(out / "history.csv"), snaps])
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 res = job.run(progress=True)

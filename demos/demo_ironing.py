@@ -89,7 +89,7 @@ class PressureProfile(cm.Writer):
 
 profile = PressureProfile()
 job = cm.Job(body, items, steps, probes,
-             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv"), profile])
+             writers=[cm.VTK(out, overwrite=True), cm.HistoryCSV(out / "history.csv"), profile])
 
 # %%
 if comm.rank == 0:

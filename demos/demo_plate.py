@@ -49,7 +49,7 @@ probes = [cm.NodeDisplacement("centre", (0.0, 0.0), component=1, column="center_
           cm.ContactLength(base, "contact_radius"), cm.ContactForce(base)]
 snaps = cm.Snapshots([0.2 * p, 0.5 * p, p])
 job = cm.Job(body, items, [cm.Step(20)], probes, load=lambda s: p * s,
-             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv"), snaps])
+             writers=[cm.VTK(out, overwrite=True), cm.HistoryCSV(out / "history.csv"), snaps])
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 res = job.run(progress=True)

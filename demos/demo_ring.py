@@ -66,7 +66,7 @@ probes = [cm.ContactForce(contact, "force", component=1, scale=-2.0),
           cm.MaxPlasticStrain()]
 snaps = cm.Snapshots([0.15 * delta, 0.3 * delta, 0.6 * delta, delta], field="plastic_strain")
 job = cm.Job(body, items, [cm.Step(36, predictor="tangent")], probes,
-             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv"), snaps],
+             writers=[cm.VTK(out, overwrite=True), cm.HistoryCSV(out / "history.csv"), snaps],
              newton=cm.NewtonSettings(line_search="energy", energy_eta=0.2, scale="force", rtol=1e-3),
              load=lambda t: delta * t)                   # the history's load: the approach delta
 if comm.rank == 0:

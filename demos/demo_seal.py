@@ -80,7 +80,7 @@ probes = [cm.Value("approach", lambda model: -2.0 * plate.displacement(contact.f
           cm.Reaction("ysym"),                                    # ysym_fx, ysym_fy
           cm.ContactLength(contact, "half_width")]                # the quarter has half the contact
 job = cm.Job(body, items, steps, probes,
-             writers=[cm.VTK(out), cm.HistoryCSV(out / "history.csv")])
+             writers=[cm.VTK(out, overwrite=True), cm.HistoryCSV(out / "history.csv")])
 res = job.run()
 
 # %% [markdown]

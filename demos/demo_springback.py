@@ -71,7 +71,7 @@ def ring_height(model):
 
 probes = [cm.ContactForce(contact, "force", component=1, scale=-2.0),
           cm.Value("height", ring_height), cm.MaxPlasticStrain()]
-job = cm.Job(body, items, steps, probes, writers=[cm.VTK(out),
+job = cm.Job(body, items, steps, probes, writers=[cm.VTK(out, overwrite=True),
                                                   cm.HistoryCSV(out / "history.csv")],
              newton=cm.NewtonSettings(line_search="energy", energy_eta=0.2, scale="force", rtol=1e-3),
              load=lambda time: delta * contact.factor)      # the plates' approach

@@ -1,9 +1,13 @@
 """Bad input is refused with a message that names the value and the fix."""
+import pathlib
+
 import pytest
 
 from comove_dolfinx import cli
 from comove_dolfinx.mechanics.material_data import Elastic, MaterialError
 from comove_dolfinx.presets import SceneError, get_scene
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize("pairs, words", [
@@ -20,6 +24,7 @@ from comove_dolfinx.presets import SceneError, get_scene
     (["n_increments=ten"], ["n_increments", "int"]),
     (["predictor=secant"], ["predictor", "secant", "tangent"]),
     (["first=0.3"], ["first = 0.3", "0.5, 0.25"]),
+    (["nu=0.3", "nu=0.4"], ["--set nu is given twice", "nu=0.4"]),
 ])
 def test_bad_parameters(pairs, words):
     with pytest.raises((SceneError, MaterialError)) as err:
@@ -87,6 +92,12 @@ def test_the_names_checked_early_are_those_implemented():
     assert set(updates.UPDATES) == set(choices.UPDATES)
     assert set(materials.LAWS) == set(choices.LAWS)
     assert set(kinematics.MODELS) == set(choices.MODELS)
+    # every field of NewtonSettings has its check (a problem file's [newton] keys are those)
+    import dataclasses
+
+    from comove_dolfinx.checks import NEWTON_CHECKS
+    from comove_dolfinx.solver import NewtonSettings
+    assert set(NEWTON_CHECKS) == {f.name for f in dataclasses.fields(NewtonSettings)}
 
 
 BAD_EARLY = [("ring", "E=-1", "E = -1.0"), ("ring", "size=inf", "size = inf"), ("beam", "L=inf", "L = inf"),
@@ -160,3 +171,152 @@ def test_version_is_the_package_metadata(capsys):
     assert capsys.readouterr().out.strip() == f"comove {version}"
     newest = re.search(r"^## (?!Unreleased\b)(\S+)", (root / "CHANGELOG.md").read_text(), re.M).group(1)
     assert newest == version
+
+
+# A problem file that runs (a strip pulled at its right end, a plate above it), and keys that break it
+PROBLEM = """
+[mesh]
+builder = "rectangle"
+L = 1.0
+H = 0.5
+size = 0.25
+[body]
+kind = "plane_strain"
+material = { E = 100.0, nu = 0.3 }
+[[items]]
+type = "fixed"
+boundary = "left"
+[[items]]
+type = "displacement"
+boundary = "right"
+value = 0.01
+component = 0
+[[items]]
+type = "contact"
+name = "plate"
+boundary = "top"
+obstacle = { type = "plane", point = [0.0, 1.0], normal = [0.0, -1.0] }
+[[steps]]
+n = 2
+[newton]
+rtol = 1e-8
+[[probes]]
+type = "contact_force"
+item = "plate"
+"""
+
+BAD_KEYS = [
+    ("rtol = 1e-8", "rtol = -1", "[newton] rtol = -1: give a finite number >= 0"),
+    ("rtol = 1e-8", "rtol = nan", "[newton] rtol = nan"),
+    ("rtol = 1e-8", "max_it = 0", "[newton] max_it = 0: give a whole number >= 1"),
+    ("rtol = 1e-8", "max_it = true", "[newton] max_it = True"),
+    ("rtol = 1e-8", 'line_search = "armijo"', "[newton] line_search = 'armijo': choose 'residual', 'energy'"),
+    ("rtol = 1e-8", 'scale = "huge"', "[newton] scale = 'huge': choose one of 'initial', 'force'"),
+    ("rtol = 1e-8", 'petsc_options = {pc_type = ["lu"]}', "[newton] petsc_options: pc_type = ['lu']"),
+    ("rtol = 1e-8", "rtl = 1e-3", "[newton] unknown setting 'rtl'"),
+    ("size = 0.25", "size = 1e-5", "[mesh] size = 1e-05 would make about 1e+10 cells, more than the 5000000"),
+    ('kind = "plane_strain"', 'kind = "plane"', "[body]: kind = 'plane': choose one of 'plane_strain'"),
+    ('kind = "plane_strain"', 'kind = "plane_strain"\ndegree = 3', "[body]: degree = 3: choose one of 1, 2"),
+    ("E = 100.0", 'E = "100"', "[body] material: E = '100': give a finite number"),
+    ("E = 100.0, nu = 0.3", "E = 100.0, nu = 0.3, hardening = [[0, 1]]", "hardening is for law"),
+    ('name = "plate"', 'name = "plate"\nmu = -1', "[[items]] 3 (contact): mu = -1: give a finite number >= 0"),
+    ('name = "plate"', 'name = "plate"\ntheta = 2', "[[items]] 3 (contact): theta = 2: choose one of 1, 0, -1"),
+    ('name = "plate"', 'name = "plate"\nmax_passes = 0', "max_passes = 0: give a whole number >= 1"),
+    ("component = 0", "component = 2", "[[items]] 2 (displacement): component = 2: choose one of 0, 1"),
+    ("value = 0.01", "value = true", "[[items]] 2 (displacement): value = True"),
+    ("n = 2", "n = 0", "[[steps]] 1: n = 0: give a whole number >= 1 and <= 1e+06 of increments"),
+    ("n = 2", 'n = 2\npredictor = "secant"', "[[steps]] 1: predictor = 'secant': choose one of"),
+    ('item = "plate"', 'item = "fixed1"', "item = 'fixed1' is not a contact item; the contact items are plate"),
+    ("[[steps]]\nn = 2\n", "", "give the steps as [[steps]] tables"),     # with steps = [] on top
+    ("normal = [0.0, -1.0]", "normal = [0.0, 0.0]", "normal = [0, 0]: give a direction"),
+    ('builder = "rectangle"', 'builder = ["rectangle"]', "builder = ['rectangle']: choose one of rectangle"),
+    ('type = "fixed"', 'type = ["fixed"]', "[[items]] 1: type = ['fixed']: choose one of fixed"),
+]
+
+
+def _run_early(tmp_path, problem: str):
+    """``comove run`` on the problem text in a process of its own; asserts that dolfinx was not
+    imported unless the run went past the checks (exit code 2 only from the checks)."""
+    import subprocess
+    import sys
+    path = tmp_path / "p.toml"
+    path.write_text(problem)
+    code = ("import sys; from comove_dolfinx import cli; rc = cli.main(sys.argv[1:]); "
+            "assert rc != 2 or 'dolfinx' not in sys.modules, 'dolfinx was imported'; sys.exit(rc)")
+    return subprocess.run([sys.executable, "-c", code, "run", str(path), "--out", str(tmp_path / "out"),
+                           "--no-progress"], capture_output=True, text=True, timeout=300)
+
+
+def test_the_problem_file_runs(tmp_path):
+    """The file the refusals below break runs as it is (so each refusal is that of its one key)."""
+    p = _run_early(tmp_path, PROBLEM)
+    assert p.returncode == 0, p.stdout + p.stderr
+
+
+@pytest.mark.parametrize("old, new, words", BAD_KEYS)
+def test_bad_problem_keys_refused_before_dolfinx_is_loaded(tmp_path, old, new, words):
+    """One line naming the key and its value, exit code 2, dolfinx never imported."""
+    assert old in PROBLEM
+    top = "steps = []\n" if old.startswith("[[steps]]") else ""        # (a key of the file's top table)
+    p = _run_early(tmp_path, top + PROBLEM.replace(old, new, 1))
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+@pytest.mark.parametrize("builder, words", [
+    ('builder = "annulus_sector"\nr_in = 6.0\nr_out = 5.0\nsize = 0.25',
+     "r_in = 6.0, r_out = 5.0: r_in must be < r_out"),
+    ('builder = "plate_section"\nR = 1.0\nt = 0.5\nz_support = 0.5\nsize = 0.1', "z_support = 0.5, t = 0.5"),
+    ('builder = "plate_section"\nR = 1.0\nt = 0.5\nz_support = 0.0\nsize = 0.1', "z_support = 0.0: give a number > 0"),
+    ('builder = "quarter_disc"\nR = 1.0\nsize = 0.1\nsize_contact = 0.2\ncontact_zone = 0.3',
+     "size_contact = 0.2, size = 0.1: size_contact must be <= size"),
+    ('builder = "quarter_disc"\nR = 1.0\nsize = 0.1\nsize_contact = 1e-5\ncontact_zone = 0.3',
+     "size = 0.1, size_contact = 1e-05 would make about"),
+    ('builder = "rectangle"\nL = 1.0\nH = 0.5\nsize = 0.25\norder = 3', "order = 3: choose one of 1, 2"),
+])
+def test_bad_builder_sizes_refused(tmp_path, builder, words):
+    """The builders' sizes in their order (which tracebacks from the builder before), and the cells
+    they would make, checked before dolfinx is loaded."""
+    text = PROBLEM.replace('builder = "rectangle"\nL = 1.0\nH = 0.5\nsize = 0.25', builder)
+    p = _run_early(tmp_path, text)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_unknown_petsc_option_value_is_one_line(tmp_path, n):
+    """PETSc refuses pc_type = "nosuchpc" when the solver is set up: one line naming the option and
+    value, exit code 2 on every rank, and the ranks do not wait for each other (the timeout)."""
+    import launch
+    path = tmp_path / "p.toml"
+    path.write_text(PROBLEM.replace("rtol = 1e-8", 'petsc_options = {pc_type = "nosuchpc"}'))
+    p = launch.run(["-m", "comove_dolfinx.cli", "run", path, "--out", tmp_path / "out", "--no-progress"],
+                   n=n, timeout=300)
+    ours = [line for line in p.stderr.splitlines() if line.startswith("comove:")]
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert "Traceback" not in p.stderr and len(ours) == 1, p.stderr
+    assert "pc_type=nosuchpc" in ours[0] and "Unable to find requested PC type nosuchpc" in ours[0]
+
+
+def test_too_fine_scene_mesh_refused_before_gmsh(tmp_path):
+    """--set size=1e-5 (gmsh ran out of memory with std::bad_alloc) names the size and the smallest
+    one allowed; that smallest size is accepted."""
+    import re
+    with pytest.raises(SceneError, match=r"size = 1e-05 would make about 1.44e\+11 cells") as err:
+        get_scene("ring", ["size=1e-5"])
+    least = re.search(r"give size >= (\S+)$", str(err.value)).group(1)
+    get_scene("ring", [f"size={least}"])
+    with pytest.raises(SceneError, match="size = 1e-05"):
+        get_scene("beam", ["size=1e-5"])
+    with pytest.raises(SceneError, match="size = 1e-05"):
+        get_scene("plate", ["size=1e-5"])
+    get_scene("beam", ["size=1e-5", f"mesh={ROOT / 'tests' / 'meshes' / 'rectangle_65426506db.msh'}"])
+
+
+
+def test_a_one_row_hardening_table_is_read(tmp_path):
+    """A perfectly plastic J2 body has a hardening table of one row, [[0, sigma_y]]."""
+    from comove_dolfinx import problem
+    path = tmp_path / "p.toml"
+    path.write_text(PROBLEM.replace("E = 100.0, nu = 0.3", 'law = "j2", E = 100.0, nu = 0.3, hardening = [[0, 5.0]]'))
+    assert problem.read(path)["body"]["material"]["hardening"] == [[0, 5.0]]

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 from mpi4py import MPI
 
+from .. import checks
 from ..delegation import delegate
 from ..mechanics.items import Item
 from ..choices import CONTACT_METHODS as METHODS
@@ -80,12 +81,16 @@ class Contact(Item):
         super().__init__(boundary)
         if method not in METHODS:
             raise ContactError(f"contact method {method!r} is unknown: choose penalty or nitsche")
-        if not (np.isfinite(gamma0) and gamma0 > 0):
-            raise ContactError(f"gamma0 = {gamma0} must be a finite number > 0")
-        if theta not in (1, 0, -1):
-            raise ContactError(f"theta = {theta}: Nitsche's variant is 1, 0 or -1")
-        if not (np.isfinite(mu) and mu >= 0):
-            raise ContactError(f"mu = {mu}: the friction coefficient must be a finite number >= 0")
+        why = checks.first(
+            checks.text("boundary", boundary, "the name of a tagged boundary"),
+            checks.number("gamma0", gamma0, gt=0),
+            checks.choice("theta", theta, (1, 0, -1), " (Nitsche's variant)"),
+            checks.number("mu", mu, ge=0, what=" (the friction coefficient)"),
+            checks.flag("relag", relag),
+            checks.number("max_passes", max_passes, ge=1, whole=True, what=" (passes of relag per increment)"),
+            checks.number("relag_tol", relag_tol, gt=0, what=" (relag's relative change of the pressure)"))
+        if why is not None:
+            raise ContactError(why)
         if not isinstance(obstacle, Obstacle):
             raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile")
         if friction not in FRICTION_LAWS:
@@ -96,7 +101,7 @@ class Contact(Item):
                                "relag=False")
         if gamma0_t is None:
             gamma0_t = min(gamma0, 10.0)
-        if not (isinstance(gamma0_t, (int, float)) and np.isfinite(gamma0_t) and gamma0_t > 0):
+        if checks.number("gamma0_t", gamma0_t, gt=0):
             raise ContactError(f"gamma0_t = {gamma0_t!r} must be a finite number > 0 (or None: min(gamma0, 10))")
         self.boundary, self.obstacle, self.method = boundary, obstacle, method
         self.gamma0, self.theta, self.mu = gamma0, theta, mu

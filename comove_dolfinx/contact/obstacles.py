@@ -14,13 +14,17 @@ import ufl
 from dolfinx import fem
 from petsc4py import PETSc
 
+from ..checks import is_number, number
+
 
 class ContactError(ValueError):
     """Unusable contact input (the message names the value and the fix)."""
 
 
 def _vector(name: str, value, size: int = 2) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
+    flat = np.ravel(np.asarray(value, dtype=object))
+    ok = len(flat) == size and all(is_number(v) for v in flat)
+    a = np.asarray(value, dtype=float) if ok else np.zeros(0)
     if a.shape != (size,) or not np.all(np.isfinite(a)):
         raise ContactError(f"{name} = {value!r}: give {size} finite numbers")
     return a
@@ -90,8 +94,8 @@ class Circle(Obstacle):
     def __init__(self, center, radius, motion=None):
         super().__init__(motion)
         self.center = _vector("the circle's center", center)
-        if not (math.isfinite(radius) and radius > 0):
-            raise ContactError(f"radius = {radius}: the obstacle's radius must be a finite number > 0")
+        if number("radius", radius, gt=0):
+            raise ContactError(f"radius = {radius!r}: the obstacle's radius must be a finite number > 0")
         self.radius = float(radius)
 
     def _rel(self, x, d):
@@ -121,11 +125,13 @@ class Profile(Obstacle):
 
     def __init__(self, points, radius: float, motion=None):
         super().__init__(motion)
-        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        flat = np.ravel(np.asarray(points, dtype=object))
+        ok = len(flat) % 2 == 0 and all(is_number(v) for v in flat)
+        pts = np.asarray(points, dtype=float).reshape(-1, 2) if ok else np.zeros((0, 2))
         if len(pts) < 1 or not np.all(np.isfinite(pts)):
             raise ContactError(f"points = {points!r}: give a polyline of finite (x, y) points")
-        if not (math.isfinite(radius) and radius > 0):
-            raise ContactError(f"radius = {radius}: the corners' radius must be a finite number > 0")
+        if number("radius", radius, gt=0):
+            raise ContactError(f"radius = {radius!r}: the corners' radius must be a finite number > 0")
         self.points, self.radius = pts, float(radius)
         self.segments = [(pts[i], pts[i + 1]) for i in range(len(pts) - 1)] or [(pts[0], pts[0])]
 
@@ -142,11 +148,12 @@ class Profile(Obstacle):
         path = pathlib.Path(path)
         if not path.is_file():
             raise ContactError(f"profile file {path}: no such file: give the path of a .geo, .brep or .step file")
-        if not (math.isfinite(radius) and radius > 0):
-            raise ContactError(f"radius = {radius}: the corners' radius must be a finite number > 0")
-        spacing = float(radius if spacing is None else spacing)
-        if not (math.isfinite(spacing) and spacing > 0):
-            raise ContactError(f"spacing = {spacing}: give a finite number > 0")
+        if number("radius", radius, gt=0):
+            raise ContactError(f"radius = {radius!r}: the corners' radius must be a finite number > 0")
+        spacing = radius if spacing is None else spacing
+        if number("spacing", spacing, gt=0):
+            raise ContactError(f"spacing = {spacing!r}: give a finite number > 0")
+        spacing = float(spacing)
         from ..geometry import gmsh_session
         gmsh = gmsh_session.gmsh
         gmsh_session.start()

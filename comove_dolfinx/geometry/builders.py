@@ -8,21 +8,30 @@ import numpy as np
 from mpi4py import MPI
 
 from .gmsh_session import gmsh
-from .meshes import _ARRANGEMENT, BODY_TAG, MeshData, add_group, build_cached
+from ..checks import mesh_size_error, number
+from .meshes import _ARRANGEMENT, BODY_TAG, MeshData, MeshError, add_group, build_cached
 
 
 def _positive(**values: float) -> None:
-    """Raise ValueError unless every keyword value is a finite number > 0."""
+    """Raise MeshError unless every keyword value is a finite number > 0 (not a bool, not a string)."""
     for name, value in values.items():
-        if not (isinstance(value, (int, float, np.number)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        if number(name, value, gt=0):
+            raise MeshError(f"{name} must be a finite number > 0, got {value!r}")
 
 
 def _check_order(order: int) -> int:
-    """Return the geometry order as an int; ValueError unless it is 1 or 2."""
+    """Return the geometry order as an int; MeshError unless it is 1 or 2."""
     if isinstance(order, bool) or order not in (1, 2):
-        raise ValueError(f"order must be 1 or 2, got {order!r}")
+        raise MeshError(f"order must be 1 or 2, got {order!r}")
     return int(order)
+
+
+def _not_too_fine(builder: str, params: dict) -> None:
+    """MeshError when the mesh would have more cells than checks.MAX_CELLS (estimated from the
+    geometry and sizes before gmsh runs: beyond that gmsh runs out of memory)."""
+    why = mesh_size_error(builder, params)
+    if why is not None:
+        raise MeshError(f"{builder}: {why}")
 
 
 def _structured(curves: list[int], counts: list[int]) -> int:
@@ -62,8 +71,9 @@ def rectangle(L: float, H: float, size: float, order: int = 2, x0: float = 0.0, 
     """
     _positive(L=L, H=H, size=size)
     order = _check_order(order)
-    nx, ny = math.ceil(L / size), max(math.ceil(H / size), 2)
     params = dict(L=float(L), H=float(H), size=float(size), order=order, x0=float(x0), y0=float(y0))
+    _not_too_fine("rectangle", params)
+    nx, ny = math.ceil(L / size), max(math.ceil(H / size), 2)
 
     def construct() -> None:
         geo = gmsh.model.geo
@@ -107,10 +117,11 @@ def plate_section(R: float = 10.0, t: float = 2.0, z_support: float = 0.25, size
     _positive(R=R, t=t, z_support=z_support, size=size)
     order = _check_order(order)
     if not z_support < t:
-        raise ValueError(f"z_support must lie strictly between 0 and t = {t}, got {z_support!r}")
+        raise MeshError(f"z_support must lie strictly between 0 and t = {t}, got {z_support!r}")
+    params = dict(R=float(R), t=float(t), z_support=float(z_support), size=float(size), order=order)
+    _not_too_fine("plate_section", params)
     nr = math.ceil(R / size)
     n_low, n_up = max(math.ceil(z_support / size), 1), max(math.ceil((t - z_support) / size), 1)
-    params = dict(R=float(R), t=float(t), z_support=float(z_support), size=float(size), order=order)
 
     def construct() -> None:
         geo = gmsh.model.geo
@@ -158,12 +169,13 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
     _positive(r_in=r_in, r_out=r_out, size=size, angle=angle)
     order = _check_order(order)
     if not r_in < r_out:
-        raise ValueError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
+        raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
     if not angle < math.pi:
-        raise ValueError(f"angle must lie in (0, pi), got {angle!r}")
+        raise MeshError(f"angle must lie in (0, pi), got {angle!r}")
+    params = dict(r_in=float(r_in), r_out=float(r_out), size=float(size), order=order, angle=float(angle))
+    _not_too_fine("annulus_sector", params)
     n_r = max(math.ceil((r_out - r_in) / size), 2)
     n_theta = max(math.ceil(angle * 0.5 * (r_in + r_out) / size), 1)
-    params = dict(r_in=float(r_in), r_out=float(r_out), size=float(size), order=order, angle=float(angle))
 
     def construct() -> None:
         geo = gmsh.model.geo
@@ -251,9 +263,9 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
     _positive(R=R, size=size, size_contact=size_contact, contact_zone=contact_zone, growth=growth)
     order = _check_order(order)
     if size_contact > size:
-        raise ValueError(f"size_contact must not exceed size = {size}, got {size_contact!r}")
+        raise MeshError(f"size_contact must not exceed size = {size}, got {size_contact!r}")
     if not isinstance(half, bool):
-        raise ValueError(f"half must be True or False, got {half!r}")
+        raise MeshError(f"half must be True or False, got {half!r}")
     params = dict(R=float(R), size=float(size), size_contact=float(size_contact),
                   contact_zone=float(contact_zone), order=order, growth=float(growth))
     if half:                    # only then, so that the quarter's cache names stay as they were
@@ -269,6 +281,7 @@ def quarter_disc(R: float, size: float, size_contact: float, contact_zone: float
             if curves != [None]:
                 add_group(1, curves, tag, name)
 
+    _not_too_fine("quarter_disc", params)
     return build_cached("quarter_disc", params, construct, comm, cache_dir)
 
 
@@ -366,4 +379,5 @@ def necking_bar(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n
                 [("axis", axis), ("neck", neck), ("end", end), ("surface", surface)], start=1):
             add_group(1, [curve], tag, name)
 
+    _not_too_fine("necking_bar", params)
     return build_cached("necking_bar", params, construct, comm, cache_dir)

@@ -27,7 +27,9 @@ import meshio
 import numpy as np
 
 from .. import compat
+from ..checks import first, flag, text
 from ..parallel import on_root
+from .folder import FolderError
 from .writers import Writer
 from .xdmf import FibreStress
 
@@ -43,11 +45,40 @@ def _atomic_write(path: pathlib.Path, write) -> None:
 
 
 class VTK(Writer):
-    """The fields of the module docstring at every converged increment, into ``folder``."""
+    """The fields of the module docstring at every converged increment, into ``folder``.
 
-    def __init__(self, folder, name: str = "results", fibres=()):
+    A folder that holds the datasets of an earlier run (``<name>.pvd``, ``<name>_NNNNN.vtu``) is
+    refused when the run starts (:class:`FolderError`), unless ``overwrite=True``, which removes them
+    first, so that no dataset of the old run is left beside the new ones; a restarted run
+    (``job.run(restart=...)``) goes on with the datasets up to its checkpoint.
+    """
+
+    def __init__(self, folder, name: str = "results", fibres=(), *, overwrite: bool = False):
+        why = first(text("name", name, "a file name for the datasets, e.g. 'results'"), flag("overwrite", overwrite))
+        if why is not None:
+            raise FolderError(f"VTK: {why}")
         self.folder, self.name, self.fibre_specs = pathlib.Path(folder), name, list(fibres)
+        self.overwrite = overwrite
         self.steps: list[tuple[float, str]] = []
+
+    def _earlier(self) -> list[pathlib.Path]:
+        """The datasets of an earlier run in the folder (the collection and its increments)."""
+        pvd = self.folder / f"{self.name}.pvd"
+        return ([pvd] if pvd.exists() else []) + sorted(self.folder.glob(f"{self.name}_[0-9]*.vtu"))
+
+    def _take_folder(self, resumed: bool) -> None:
+        """On rank 0: make the folder; refuse (or with ``overwrite`` remove) an earlier run's datasets,
+        unless the run is a restart, which goes on with them."""
+        if self.folder.exists() and not self.folder.is_dir():
+            raise FolderError(f"VTK: {self.folder} is a file, not a folder: choose a folder")
+        self.folder.mkdir(parents=True, exist_ok=True)
+        old = [] if resumed else self._earlier()
+        if old and not self.overwrite:
+            shown = ", ".join(p.name for p in old[:2]) + (", ..." if len(old) > 2 else "")
+            raise FolderError(f"VTK: {self.folder} holds the datasets of an earlier run ({shown}): pass "
+                              "VTK(folder, overwrite=True) to replace them, or choose another folder")
+        for p in old:
+            p.unlink()
 
     # -- set-up ---------------------------------------------------------------------------------
     def open(self, run) -> None:
@@ -78,7 +109,8 @@ class VTK(Writer):
             self.cells = np.concatenate([c for _, _, c in parts])
         self.fibres = [FibreStress(m, name, A) for name, A in self.fibre_specs]
         self.contacts = [item for item in m.items if item.kind == "contact"]
-        on_root(self.comm, self.folder.mkdir, parents=True, exist_ok=True)
+        on_root(self.comm, self._take_folder, bool(run.resumed_rows))
+        self.steps = []
         if run.resumed_rows:             # a restarted run: the datasets up to its checkpoint
             import xml.etree.ElementTree as ET
             pvd = self.folder / f"{self.name}.pvd"

@@ -1,9 +1,9 @@
 """A body: its mesh, the 2D model, the material, the stress update and the discretisation."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
+from ..checks import first, number
 from ..choices import PLASTIC_UPDATES as ROTATING_UPDATES  # noqa: E402  (they carry a rotated old stress)
 from .kinematics import MODELS
 from .material_data import Elastic, MaterialError
@@ -38,8 +38,11 @@ class Body:
     thickness : float
         Out-of-plane thickness of plane models.
     quadrature_degree : int, optional
-        Of the volume integrals; by default 2 (3 points, exact P2 small-strain stiffness), 3 in
-        axisymmetry (the weight r), 1 for P1.
+        Of the volume integrals, 1 to 30; by default 2 (3 points, exact P2 small-strain stiffness),
+        3 in axisymmetry (the weight r), 1 for P1.
+
+    Every value is checked here: one that cannot be used raises :class:`BodyError` (or
+    ``MaterialError``) naming it and the fix.
     """
 
     mesh: object
@@ -51,21 +54,27 @@ class Body:
     quadrature_degree: int | None = None
 
     def __post_init__(self):
-        if self.kind not in MODELS:
+        if not all(hasattr(self.mesh, a) for a in ("mesh", "facet_tags", "tags")):
+            raise BodyError(f"mesh = {self.mesh!r}: give a MeshData (cm.rectangle, cm.load_msh; a dolfinx "
+                            "mesh through cm.from_dolfinx(mesh, facet_tags, names))")
+        if not isinstance(self.kind, str) or self.kind not in MODELS:
             raise BodyError(f"kind = {self.kind!r} is unknown: choose one of {', '.join(MODELS)}")
         if not isinstance(self.material, (Elastic, Plastic)):
             raise BodyError(f"material = {self.material!r}: give Elastic(E, nu), J2(E, nu, hardening) "
                             "or Chen(E, nu, hardening)")
-        if self.update not in UPDATES:
+        if not isinstance(self.update, str) or self.update not in UPDATES:
             raise BodyError(f"update = {self.update!r} is unknown: choose one of {', '.join(UPDATES)}")
         if self.plastic is not None and self.update not in ROTATING_UPDATES:
             raise MaterialError(f"update {self.update!r} cannot carry plasticity: use one of "
                                 f"{', '.join(ROTATING_UPDATES)}")
-        if self.degree not in (1, 2) or isinstance(self.degree, bool):
+        if number("degree", self.degree, whole=True) or self.degree not in (1, 2):
             raise BodyError(f"degree = {self.degree!r}: use 1 or 2")
-        if not (isinstance(self.thickness, (int, float)) and math.isfinite(self.thickness)
-                and self.thickness > 0):
-            raise BodyError(f"thickness = {self.thickness!r} must be a finite number > 0")
+        why = first(number("thickness", self.thickness, gt=0),
+                    None if self.quadrature_degree is None else number(
+                        "quadrature_degree", self.quadrature_degree, ge=1, le=30, whole=True,
+                        what=" (or None: the default of the degree and kind)"))
+        if why:
+            raise BodyError(why)
 
     @property
     def elastic(self) -> Elastic:

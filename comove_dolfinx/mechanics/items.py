@@ -29,6 +29,7 @@ from typing import Callable
 import numpy as np
 import ufl
 
+from ..checks import is_number
 from .kinematics import Kinematics
 
 
@@ -37,9 +38,11 @@ class ItemError(ValueError):
 
 
 def finite(name: str, value, shape: tuple = ()) -> np.ndarray:
-    """``value`` as a float array of ``shape``; :class:`ItemError` naming ``name`` unless it has that
-    shape and is finite."""
-    a = np.asarray(value, dtype=float)
+    """``value`` as a float array of ``shape`` (a number, or a vector of numbers); :class:`ItemError`
+    naming ``name`` unless it has that shape and is finite (numbers only: not strings, not True/False)."""
+    flat = np.ravel(np.asarray(value, dtype=object)) if shape else [value]
+    ok = len(flat) == (shape[0] if shape else 1) and all(is_number(v) for v in flat)
+    a = np.asarray(value, dtype=float) if ok else np.zeros(0)
     if a.shape != shape or not np.all(np.isfinite(a)):
         want = "a finite number" if shape == () else f"{shape[0]} finite numbers"
         raise ItemError(f"{name} = {value!r}: give {want}")

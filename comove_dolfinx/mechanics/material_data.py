@@ -86,6 +86,12 @@ class Elastic:
     nu: float
 
     def __post_init__(self) -> None:
+        for name in ("E", "nu"):
+            value = getattr(self, name)
+            scalar = isinstance(value, (int, float, np.integer, np.floating)) or (
+                isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "iuf")
+            if isinstance(value, (bool, np.bool_)) or not scalar:
+                raise MaterialError(f"{name} = {value!r}: give a finite number")
         E, nu = float(self.E), float(self.nu)
         if not np.isfinite(E) or E <= 0.0:
             raise MaterialError(f"E = {self.E!r} must be a finite number > 0 (Young's modulus)")
@@ -165,6 +171,11 @@ class Hardening:
     delta: float = 0.0
 
     def __post_init__(self) -> None:
+        for name in ("strain", "stress"):
+            values = np.ravel(np.asarray(getattr(self, name), dtype=object))
+            if any(isinstance(v, (bool, np.bool_, str, bytes)) or not isinstance(v, (int, float, np.number))
+                   for v in values):
+                raise MaterialError(f"the hardening table's {name} = {getattr(self, name)!r}: give numbers")
         p = tuple(float(v) for v in np.atleast_1d(self.strain))
         s = tuple(float(v) for v in np.atleast_1d(self.stress))
         if len(p) != len(s):

@@ -134,6 +134,9 @@ class Scene:
             if key not in types:
                 raise SceneError(f"scene {self.name!r} has no parameter {key!r}; its parameters are: "
                                  f"{', '.join(types)} (see 'comove scenes')")
+            if key in changes:
+                raise SceneError(f"--set {key} is given twice ({key}={changes[key]!r} and {pair.strip()!r}): "
+                                 "give it once")
             changes[key] = _convert(key, text.strip(), types[key])
         return dataclasses.replace(self, **changes)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
+from ..checks import mesh_size_error
 from ..mechanics.material_data import Hardening, MaterialError
 from ..choices import LAWS, PLASTIC_UPDATES
 from .base import ContactScene, Scene, SceneError
@@ -15,6 +16,15 @@ from .base import ContactScene, Scene, SceneError
 def _check_strip(scene) -> None:
     if not (scene.L > 0 and scene.h > 0):
         raise SceneError(f"L = {scene.L}, h = {scene.h}: both must be > 0")
+    _check_cells(scene, "rectangle", L=scene.L, H=scene.h)
+
+
+def _check_cells(scene, builder: str, **params) -> None:
+    """SceneError when the scene's built-in mesh would have more cells than a mesh may have
+    (checks.mesh_size_error, estimated before gmsh runs); nothing with a mesh file of the user's."""
+    why = None if scene.mesh else mesh_size_error(builder, {**params, "size": scene.size})
+    if why is not None:
+        raise SceneError(why)
 
 
 def _check_small_against_E(scene, name: str, value: float) -> None:
@@ -146,6 +156,7 @@ class Plate(ContactScene):
         if not (self.R > 0 and self.t > 0 and 0 < self.z_support < self.t):
             raise SceneError(f"R = {self.R}, t = {self.t}, z_support = {self.z_support}: need R, t > 0 "
                              "and 0 < z_support < t")
+        _check_cells(self, "plate_section", R=self.R, t=self.t, z_support=self.z_support)
         _check_small_against_E(self, "p_max", self.p_max)
 
     def mesh_data(self, comm):
@@ -250,6 +261,7 @@ class Ring(ContactScene):
         super().validate()
         if not (self.R_out > 0 and 0 < self.wall < self.R_out):
             raise SceneError(f"R_out = {self.R_out}, wall = {self.wall}: need 0 < wall < R_out")
+        _check_cells(self, "annulus_sector", r_in=self.R_out - self.wall, r_out=self.R_out)
         if not self.delta_max > 0:
             raise SceneError(f"delta_max = {self.delta_max} must be > 0")
         if self.law not in LAWS:

@@ -1,9 +1,10 @@
 """Newton iterations, line searches and the increment loop."""
+from ..checks import SettingsError
 from ..deprecated import warn_renamed
 from .increments import Increment, IncrementalSolver, StepOutcome, StepSettings, _extrapolate
 from .newton import Newton, NewtonSettings, Timer
 
-__all__ = ["Increment", "IncrementalSolver", "Newton", "NewtonSettings", "StepOutcome", "StepSettings", "Timer",
+__all__ = ["Increment", "IncrementalSolver", "Newton", "NewtonSettings", "SettingsError", "StepOutcome", "StepSettings", "Timer",
            "_extrapolate"]
 
 

@@ -14,11 +14,13 @@ of the 2-D displacement space as the matrix's near-nullspace (for algebraic mult
 """
 from __future__ import annotations
 
+import re
 from contextlib import contextmanager
 
 from petsc4py import PETSc
 
 from .. import compat
+from ..checks import SolverOptionError, petsc_options_error
 from ..mechanics.model import rigid_motions
 from ..parallel import first_failure
 
@@ -33,8 +35,27 @@ DEFAULTS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type":
 MUMPS_DEFAULTS = {"mat_mumps_icntl_8": 0}
 
 
-class SolverOptionError(ValueError):
-    """PETSc options that PETSc refuses (an unknown type, a value of the wrong kind)."""
+class PETScError(RuntimeError):
+    """A PETSc error of a linear solve in one line: its code and PETSc's own words."""
+
+
+def petsc_reason(err: Exception) -> str:
+    """PETSc's own words in one line: the last line of a PETSc error's message (its traceback of
+    functions before it), without the rank's ``[0]``."""
+    lines = [re.sub(r"^\[\d+\]\s*", "", line).strip() for line in str(err).splitlines()]
+    lines = [line for line in lines if line]
+    return lines[-1] if lines else str(err)
+
+
+def refused(options: dict, err: Exception) -> SolverOptionError:
+    """The error of options that PETSc refused at the solver's set-up, in one line naming the option
+    and value that PETSc's message names (all the options given if it names none) and the fix."""
+    why = petsc_reason(err)
+    named = [(k, v) for k, v in options.items() if v is not None and re.search(
+        rf"(?<![\w.-]){re.escape(_text(v))}(?![\w.-])", why)]
+    shown = ", ".join(f"{k}={_text(v)}" for k, v in (named or options.items())) or "none in the settings"
+    return SolverOptionError(f"PETSc refused the linear solver's option {shown} (prefix {PREFIX!r}; "
+                             f"PETSc: {why}): check the name and value, or remove it (PETSC_OPTIONS too)")
 
 
 def _text(value) -> str | None:
@@ -80,9 +101,9 @@ def with_defaults(options: dict) -> dict:
 def make_ksp(comm, A: PETSc.Mat | None, options: dict) -> PETSc.KSP:
     """The KSP on A (none yet when None): the defaults, then the options of the database and
     ``options``."""
-    for key in options:
-        if not isinstance(key, str) or not key.strip("-"):
-            raise SolverOptionError(f"petsc_options: {key!r} is not an option name")
+    why = petsc_options_error(options)
+    if why is not None:
+        raise SolverOptionError(why)
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(PREFIX)
     if A is not None:
@@ -95,9 +116,7 @@ def make_ksp(comm, A: PETSc.Mat | None, options: dict) -> PETSc.KSP:
         with pushed(options):
             ksp.setFromOptions()
     except PETSc.Error as err:
-        shown = ", ".join(f"{k}={v}" for k, v in options.items()) or "none given in the settings"
-        raise SolverOptionError(f"PETSc refused the linear solver's options under the prefix "
-                                f"{PREFIX!r} ({shown}; PETSC_OPTIONS too): PETSc error {err}") from None
+        raise refused(options, err) from None
     return ksp
 
 
@@ -197,7 +216,7 @@ def solve(ksp: PETSc.KSP, options: dict, rhs: PETSc.Vec, x: PETSc.Vec, comm) -> 
             with pushed(options):
                 ksp.solve(rhs, x)
         except PETSc.Error as e:
-            err = e
+            err = PETScError(f"error code {e.ierr}: {petsc_reason(e)}")      # (one line)
         failure = first_failure(comm, err)
         if failure is not None or ksp.getConvergedReason() >= 0:
             return failure, grown

@@ -42,7 +42,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import defaultdict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from dolfinx import fem
@@ -50,6 +50,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .. import compat
+from ..checks import SettingsError, SolverOptionError, newton_field_error
 from ..mechanics.model import InvertedElement, Model, ReturnMapFailure
 from . import failures, linear
 from .linesearch import LineSearches
@@ -92,6 +93,17 @@ class _Span:
 
 @dataclass
 class NewtonSettings:
+    """How Newton iterates and when it has converged (the module docstring; docs/api.md).
+
+    Every field is checked when the settings are made, and again by :class:`Newton`: a value that
+    cannot be used raises :class:`~comove_dolfinx.checks.SettingsError` naming it and the fix
+    (tolerances finite and >= 0, 0 turning a test off, with rtol or atol > 0; ``max_it`` a whole
+    number >= 1; ``divergence`` > 0; ``backtracks`` and ``free_its`` whole numbers >= 0;
+    ``energy_eta`` in (0, 1]; ``line_search`` and ``scale`` one of the names below;
+    ``petsc_options`` a dict of option names to strings, numbers or True/False). An option value
+    that PETSc does not know is refused when the linear solver is set up (solver/linear.py).
+    """
+
     rtol: float = 1e-8
     atol: float = 1e-12
     stol: float = 1e-10
@@ -110,6 +122,18 @@ class NewtonSettings:
     monitor: object | None = None  # an observer of the iterations (methods iteration, rejected,
                                    # solved: the module docstring), e.g. stability.Recorder
 
+    def __post_init__(self):
+        self.check()
+
+    def check(self) -> None:
+        """:class:`SettingsError` naming the first field that cannot be used and the fix
+        (checks.newton_error: tolerances finite and >= 0, max_it a whole number >= 1, the names
+        known, petsc_options a dict of names to values); a Newton checks its settings again."""
+        bad = newton_field_error({f.name: getattr(self, f.name) for f in fields(self)}, unknown=False)
+        if bad is not None:
+            error = SolverOptionError if bad[0] == "petsc_options" else SettingsError
+            raise error(f"NewtonSettings: {bad[1]}")
+
 
 class Newton(LineSearches):
     """Newton-Raphson on ``model.u`` with an exact Jacobian and a direct solver (MUMPS unless the
@@ -119,6 +143,7 @@ class Newton(LineSearches):
                  timer: Timer | None = None):
         self.model = model
         self.settings = settings or NewtonSettings()
+        self.settings.check()              # (its fields may have been changed since it was made)
         self.timer = timer or Timer()
         self.b = compat.create_vector(model.residual_form)
         self.ksp, self.A, self.petsc_options = linear.make_solver(
@@ -130,10 +155,6 @@ class Newton(LineSearches):
             contacts = [item for item in model.items if item.kind == "contact"]
             ls = ("energy" if any(getattr(c, "mu", 0.0) > 0 for c in contacts) else True) if contacts else False
         self.line_search = {True: "residual", False: None, "none": None}.get(ls, ls)
-        if self.line_search not in (None, "residual", "energy"):
-            raise ValueError(f"line_search = {ls!r}: choose residual, energy or none")
-        if self.settings.scale not in ("initial", "force"):
-            raise ValueError(f"scale = {self.settings.scale!r}: choose initial or force")
         if self.settings.scale == "force":     # every residual assembles these two: compiled here,
             _ = model.internal_force_form, model.items_form     # not in the first increment
         # the iterate, the correction and their PETSc vectors (views of the same memory, for the life
