@@ -40,7 +40,7 @@ def _contact_of(probe: str, contact):
     """``contact`` if it is a contact item or None (a job refuses a probe of no contact:
     :func:`check_contacts`), else ProbeError naming the probe."""
     if contact is not None and (getattr(contact, "kind", None) != "contact"
-                                or not callable(getattr(contact, "zone", None))):
+                                or not hasattr(type(contact), "zone")):   # a method or a property
         raise ProbeError(f"{probe}: contact = {contact!r}: give the Contact item itself (the one in the "
                          "job's items), not its name")
     return contact
