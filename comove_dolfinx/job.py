@@ -331,7 +331,7 @@ class Job:
         saved = None
         if restart is not None:
             from .io import checkpoint
-            saved = checkpoint.load(restart, comm)
+            saved = checkpoint.load(restart, comm, self)       # refuses another job's checkpoint
             run.resumed_rows = [dict(r) for r in saved[0]["rows"]]
             res.rows = [dict(r) for r in run.resumed_rows]
             res.increments = [Increment(int(r["step"]), float(r["time"]), int(r["newton_its"]), float(r["wall_s"]))
