@@ -110,8 +110,7 @@ def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: boo
 
     from mpi4py import MPI
 
-    from . import problem
-    from . import command_signals
+    from . import command_signals, problem
     from .io import VTK, Console, HistoryCSV, RunInfo
     from .io import restart as restarts
     from .io.checkpoint import Checkpoint

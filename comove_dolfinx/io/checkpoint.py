@@ -216,9 +216,11 @@ def load(folder, comm, job=None) -> tuple[dict, list]:
                                   "--restart") from None
     if job is not None:
         check_job(folder, meta, parts, job, comm)
-    scale = getattr(folder, "time_scale", 1.0)
-    if scale != 1.0 or getattr(folder, "dt_max", None) is not None:
-        _rescale(meta, parts, scale, getattr(folder, "dt_max", None))
+    scale, dt_max = getattr(folder, "time_scale", 1.0), getattr(folder, "dt_max", None)
+    if scale != 1.0 or dt_max is not None:
+        if len(meta.get("steps", [])) != 1:
+            raise CheckpointError(f"{folder}: a new final load or increment applies to a job of one step")
+        _rescale(meta, parts, scale, dt_max)
     return meta, parts
 
 
