@@ -84,27 +84,32 @@ def test_ctrl_c_on_two_ranks_ends_every_rank(tmp_path, delay):
     assert _status(out) in (None, "interrupted")
 
 
-def test_a_full_disk_ends_the_run_with_one_line(tmp_path, monkeypatch, capsys):
-    """A write that fails with ENOSPC at the third increment (the history's writer here, after it
-    has begun a temporary file): exit code 1, one line naming the file and the fix, run.json says
-    failed with that message, the temporary file is gone and the two increments before are kept."""
+@pytest.mark.mpi
+def test_a_full_disk_ends_the_run_with_one_line(mpi_tmp, comm, monkeypatch, capsys):
+    """A write that fails with ENOSPC at the third increment (rank 0's history file here, after it
+    has begun a temporary file; on two ranks the other rank learns it at the same point): exit code
+    1 on every rank, one line naming the file and the fix, run.json says failed with that message,
+    the temporary file is gone and the two increments before are kept."""
     from comove_dolfinx import cli
     from comove_dolfinx.io import writers
-    out = tmp_path / "run"
-    write, rows = writers.HistoryCSV.write, []
+    out = mpi_tmp / "run"
+    write, rows = writers.HistoryCSV._write, []
 
-    def full(self, run, row, increment):
-        rows.append(row)
+    def full(self, values):                 # rank 0's part of the history's writer
+        rows.append(values)
         if len(rows) == 3:
             (out / ".history.csv.tmp").write_text("half a row")
             raise OSError(errno.ENOSPC, "No space left on device", str(out / "history.csv"))
-        write(self, run, row, increment)
-    monkeypatch.setattr(writers.HistoryCSV, "write", full)
+        write(self, values)
+    monkeypatch.setattr(writers.HistoryCSV, "_write", full)
     code = cli.main(["run", "elastica", "--out", str(out), "--no-progress", "--set", "n_steps=5",
                      "--set", "size=0.25"])
     err = capsys.readouterr().err
-    assert code == 1 and len(err.strip().splitlines()) == 1, err
-    assert f"cannot write {out / 'history.csv'}: No space left on device (ENOSPC): free some space" in err, err
+    assert code == 1
+    comm.barrier()
+    if comm.rank == 0:
+        assert len(err.strip().splitlines()) == 1, err
+        assert f"cannot write {out / 'history.csv'}: No space left on device (ENOSPC): free some space" in err
     info = json.loads((out / "run.json").read_text())
     assert info["status"] == "failed" and "No space left on device" in info["message"]
     assert not list(out.glob(".*.tmp"))
