@@ -2,12 +2,17 @@
 
     comove run SCENE --out DIR [--set key=value ...] [-v] [--no-progress]
     comove run PROBLEM.toml --out DIR [-v] [--no-progress]
+    comove run ... --restart [--allow-change KEY[,KEY...]]
     comove scenes
     comove verify NAME|all --out DIR [--small]
+
+Exit codes: 0 the run completed; 1 it did not (an increment could not be solved, or the run failed:
+a full disk, an error of PETSc); 2 bad input (one line naming the value and the fix, before dolfinx
+is loaded where possible); 130 Ctrl-C and 143 SIGTERM, at any moment from the start of the command
+(one line, no traceback; run.json, if the run wrote one, says ``interrupted``).
 """
 from __future__ import annotations
 
-import argparse
 import logging
 import sys
 
@@ -41,33 +46,41 @@ def _verbose(comm) -> None:
 
 
 def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, overwrite: bool = False,
-              restart: bool = False, checkpoint_every: int = 1, checkpoint_interval: float = CHECKPOINT_INTERVAL):
+              restart: bool = False, checkpoint_every: int = 1, checkpoint_interval: float = CHECKPOINT_INTERVAL,
+              allow=()):
     """Run a preset ``scene`` into the folder ``out_dir`` (history.csv, results.pvd with one .vtu per
     increment, run.json, the console's lines); returns the :class:`Results`. ``newton``: settings
-    instead of the scene's; ``overwrite``: replace the results of an earlier run there."""
+    instead of the scene's; ``overwrite``: replace the results of an earlier run there; ``restart``:
+    go on from its checkpoint, refused (RestartError) if the checkpoint is of another scene or of
+    other parameters, unless ``allow`` names them and the scene can take the change (io/restart.py)."""
     import dataclasses
     import pathlib
 
     from mpi4py import MPI
 
+    from . import command_signals
     from .io import VTK, Console, HistoryCSV, RunInfo
+    from .io import restart as restarts
     from .io.checkpoint import Checkpoint
     from .io.folder import RunFolder
 
     comm = comm or MPI.COMM_WORLD
     out = pathlib.Path(out_dir)
+    identity = restarts.scene_identity(scene)
+    point = restarts.restart_point(out, identity, allow, scene, comm) if restart else None
     with RunFolder(out, overwrite, comm, restart):
         md = scene.mesh_data(comm)
         # the dataset before its history row: a kill between them leaves no row without dataset
         writers = [VTK(out, fibres=scene.fibres()), HistoryCSV(out / "history.csv"),
-                   RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)}),
+                   RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)},
+                           identity=identity),
                    Console(scene.name, scene.columns),
-                   Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval),
-                   _signal_writer()]
+                   Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval, identity=identity),
+                   command_signals.writer()]
         job = scene.job(md, writers)
         if newton is not None:
             job.newton = newton
-        return job.run(progress=progress, restart=out / "checkpoint" if restart else None)
+        return job.run(progress=progress, restart=point)
 
 
 def _errors():
@@ -76,69 +89,60 @@ def _errors():
     from .geometry import MeshError
     from .io.checkpoint import CheckpointError
     from .io.folder import FolderError
+    from .io.restart import RestartError
     from .job import JobError
     from .loads import ItemError
     from .mechanics.body import BodyError
     from .mechanics.material_data import MaterialError
     from .presets import SceneError
     from .probes import ProbeError
+    from .solver.linear import SolverOptionError
     return (MeshError, SceneError, MaterialError, ContactError, BodyError, ItemError, JobError, ProbeError,
-            FolderError, CheckpointError, SettingsError)
+            FolderError, CheckpointError, RestartError, SettingsError)
 
 
 def run_problem(path, out_dir, comm=None, progress: bool = False, overwrite: bool = False,
-                restart: bool = False, checkpoint_every: int = 1, checkpoint_interval: float = CHECKPOINT_INTERVAL):
-    """Run a problem file (problem.py) into ``out_dir``, with the writers of the scenes."""
+                restart: bool = False, checkpoint_every: int = 1, checkpoint_interval: float = CHECKPOINT_INTERVAL,
+                allow=()):
+    """Run a problem file (problem.py) into ``out_dir``, with the writers of the scenes; a restart is
+    refused if the checkpoint is of another file or of other content, unless ``allow`` has
+    ``problem``."""
     import pathlib
 
     from mpi4py import MPI
 
-    from . import problem
+    from . import command_signals, problem
     from .io import VTK, Console, HistoryCSV, RunInfo
+    from .io import restart as restarts
     from .io.checkpoint import Checkpoint
     from .io.folder import RunFolder
 
     comm = comm or MPI.COMM_WORLD
     data = problem.read(path)
     out = pathlib.Path(out_dir)
+    identity = restarts.problem_identity(path, data)
+    point = restarts.restart_point(out, identity, allow, None, comm) if restart else None
     with RunFolder(out, overwrite, comm, restart):
         writers = [VTK(out), HistoryCSV(out / "history.csv"),
-                   RunInfo(out / "run.json", {"problem": str(path), **data}), Console(pathlib.Path(path).stem),
-                   Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval), _signal_writer()]
-        return problem.build(data, comm, writers).run(progress=progress,
-                                                      restart=out / "checkpoint" if restart else None)
+                   RunInfo(out / "run.json", {"problem": str(path), **data}, identity=identity),
+                   Console(pathlib.Path(path).stem),
+                   Checkpoint(out / "checkpoint", checkpoint_every, checkpoint_interval, identity=identity),
+                   command_signals.writer()]
+        return problem.build(data, comm, writers).run(progress=progress, restart=point)
 
 
-def _on_sigterm(signum, frame):
-    raise KeyboardInterrupt("SIGTERM")
-
-
-def _on_sigint(signum, frame):
-    raise KeyboardInterrupt()
-
-
-def _signal_writer():
-    """A writer that installs the command's SIGTERM and Ctrl-C handlers when the run starts (after
-    the problem is built): code of a problem file may have reset Ctrl-C to the system's default (the
-    process dies without a word), as gmsh's Python API does (the package's own gmsh calls keep the
-    handler: geometry/gmsh_session.py). While the increments run, the job turns these handlers'
-    signals into a decision of all ranks (parallel.Interrupts)."""
-    import signal
-
-    from .io import Writer
-
-    class Signals(Writer):
-        def open(self, run):
-            signal.signal(signal.SIGTERM, _on_sigterm)
-            signal.signal(signal.SIGINT, _on_sigint)
-    return Signals()
+def _failures():
+    """The exceptions of a run that fails for a reason outside the program (a full disk, an error
+    that PETSc reports): one line, exit code 1."""
+    from petsc4py import PETSc
+    return (OSError, PETSc.Error)
 
 
 def _run(args) -> int:
-    import signal
-
     from mpi4py import MPI
 
+    from .io.folder import failure_line
+    from .io.restart import allowed
     from .presets import get_scene
     from .problem import ProblemError
 
@@ -146,10 +150,12 @@ def _run(args) -> int:
     errors = _errors() + (ProblemError,)
     problem = args.scene.endswith(".toml")
 
-    def fail(err) -> int:
+    def fail(err, code=2) -> int:
         if comm.rank == 0:
-            print(f"comove: {err}", file=sys.stderr)
-        return 2
+            lines = str(err).strip().splitlines() or [""]      # (PETSc's messages: its stack between)
+            print(f"comove: {lines[0]}" + (f" ... {lines[-1].strip()}" if len(lines) > 1 else ""),
+                  file=sys.stderr)
+        return code
 
     if problem and args.set:
         return fail("--set applies to scenes; edit the problem file instead")
@@ -159,26 +165,48 @@ def _run(args) -> int:
         return fail(err)
     if args.verbose:
         _verbose(comm)
-    signal.signal(signal.SIGTERM, _on_sigterm)
-    signal.signal(signal.SIGINT, _on_sigint)
     kw = dict(progress=not args.no_progress, overwrite=args.overwrite, restart=args.restart,
-              checkpoint_every=args.checkpoint_every, checkpoint_interval=args.checkpoint_interval)
+              checkpoint_every=args.checkpoint_every, checkpoint_interval=args.checkpoint_interval,
+              allow=allowed(args.allow_change))
     try:
         result = run_problem(args.scene, args.out, **kw) if problem else run_scene(scene, args.out, **kw)
     except errors as err:
         return fail(err)
-    except KeyboardInterrupt as err:
-        why = str(err) or "Ctrl-C"
-        if comm.rank == 0:
-            print(f"comove: interrupted ({why}); every converged increment is in {args.out} "
-                  "(run.json says how far it got)", file=sys.stderr)
-        return 143 if why == "SIGTERM" else 130
+    except _failures() as err:
+        return fail(failure_line(err), 1)
     if not result.completed and comm.rank == 0:
         print(f"comove: {result.message}", file=sys.stderr)
     return 0 if result.completed else 1
 
 
 def main(argv=None) -> int:
+    """The command (``argv``: its arguments, else the process's). Ctrl-C and SIGTERM end it with
+    one line at any moment, also while it imports or builds (exit codes 130 and 143,
+    command_signals.py); without ``argv`` (the process's command) they are ignored once the command
+    has returned, while the process shuts MPI and PETSc down."""
+    from . import command_signals as cs
+    previous, hook = cs.handle(), sys.unraisablehook
+    cs.SIGNALLED.clear()
+    sys.unraisablehook = cs.quiet_after_signal
+    parsed: list = []                    # the parsed arguments, once they are
+    try:
+        return _main(argv, parsed)
+    except KeyboardInterrupt as err:
+        return cs.interrupted(err, parsed[0] if parsed else None, _rank())
+    except Exception as err:
+        if not cs.SIGNALLED:             # a bug: its traceback
+            raise
+        # an import that a signal cut short fails so (numpy's C extension: ImportError)
+        return cs.interrupted(err, parsed[0] if parsed else None, _rank())
+    finally:
+        cs.restore(previous, ignore=argv is None)
+        if argv is not None:
+            sys.unraisablehook = hook
+
+
+def _parser():
+    """The command's arguments."""
+    import argparse
     parser = argparse.ArgumentParser(
         prog="comove", description="Large deformation of solids pressed against rigid obstacles "
         "by the co-moving S-R method.")
@@ -197,6 +225,9 @@ def main(argv=None) -> int:
     run.add_argument("--restart", action="store_true",
                      help="go on from the last checkpoint in the --out folder (same scene and "
                           "parameters, any number of ranks)")
+    run.add_argument("--allow-change", action="append", default=[], metavar="KEY[,KEY...]",
+                     help="with --restart: parameters that may differ from the checkpoint's (e.g. "
+                          "delta_max for a larger final load; 'problem' for a problem file's content)")
     run.add_argument("--checkpoint-every", type=int, default=1, metavar="K",
                      help="save the state every K converged increments (default 1)")
     run.add_argument("--checkpoint-interval", type=float, default=CHECKPOINT_INTERVAL, metavar="S",
@@ -214,7 +245,13 @@ def main(argv=None) -> int:
     ve.add_argument("case", help="a case's name, or all")
     ve.add_argument("--out", default="results/verify", help="output folder (default results/verify)")
     ve.add_argument("--small", action="store_true", help="the coarse meshes of the test suite")
+    return parser
+
+
+def _main(argv, parsed: list) -> int:
+    parser = _parser()
     args = parser.parse_args(argv)
+    parsed.append(args)
     if args.command == "study":
         return _study(args)
     if args.command == "verify":
@@ -226,8 +263,9 @@ def main(argv=None) -> int:
                 print(f"comove: {err}", file=sys.stderr)
             return 2
     _quiet_jit()
-    _own_signals()
-    from . import check_platform
+    from . import check_platform, command_signals
+    command_signals.own_signals()
+    command_signals.import_gmsh()       # (its import sets Ctrl-C to the system's default)
     check_platform()
     if args.command == "scenes":
         try:
@@ -286,15 +324,6 @@ def _verify(args) -> int:
     return runner.main(names, pathlib.Path(args.out), args.small)
 
 
-def _own_signals() -> None:
-    """The command ends cleanly on SIGTERM and Ctrl-C itself: PETSc must not install its own
-    handlers (some builds do, and abort the process on SIGTERM). Before PETSc is loaded."""
-    import os
-    opts = os.environ.get("PETSC_OPTIONS", "")
-    if "-no_signal_handler" not in opts:
-        os.environ["PETSC_OPTIONS"] = f"{opts} -no_signal_handler".strip()
-
-
 def _ranks() -> int:
     """The number of MPI ranks from the launcher's environment (before MPI is loaded)."""
     import os
@@ -328,15 +357,21 @@ def _check_early(args):
         return f"--checkpoint-interval {args.checkpoint_interval}: give a number of seconds >= 0"
     if args.restart and args.overwrite:
         return "--restart and --overwrite: choose one (go on from the checkpoint, or start afresh)"
+    if args.allow_change and not args.restart:
+        return "--allow-change applies to --restart: drop it, or add --restart"
     try:
         if args.scene.endswith(".toml"):
-            read(args.scene)
+            scene, data = None, read(args.scene)
         else:
-            get_scene(args.scene, args.set)
+            scene, data = get_scene(args.scene, args.set), None
     except (SceneError, MaterialError, ProblemError) as err:
         return err
     from .io.folder import check
-    return check(args.out, args.overwrite, args.restart)
+    why = check(args.out, args.overwrite, args.restart)
+    if why is None and args.restart:
+        from .io import restart
+        why = restart.early_error(args.out, args.scene, scene, data, restart.allowed(args.allow_change))
+    return why
 
 
 if __name__ == "__main__":

@@ -135,7 +135,7 @@ class Job:
         run = RunState(self, model, self.columns)
         res = Results(list(self.columns), dofs=model.num_dofs())
         run.contact_stats = {"first_contact_load": None, "max_penetration": 0.0}
-        resumed = Restart(restart, model.comm) if restart is not None else None
+        resumed = Restart(restart, model.comm, self) if restart is not None else None
         if resumed is not None:
             resumed.resume_records(run, res)
         run.job_rows = res.rows

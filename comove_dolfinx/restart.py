@@ -14,11 +14,12 @@ from .io.csv_tables import Columns
 
 
 class Restart:
-    """The newest checkpoint in ``folder``, read on every rank of ``comm`` (any number of ranks)."""
+    """The newest checkpoint in ``folder``, read on every rank of ``comm`` (any number of ranks); with
+    ``job``, refused unless it is that job's (io/checkpoint.py, check_job)."""
 
-    def __init__(self, folder, comm):
+    def __init__(self, folder, comm, job=None):
         from .io import checkpoint
-        self.meta, self.parts = checkpoint.load(folder, comm)
+        self.meta, self.parts = checkpoint.load(folder, comm, job)
         self.pending = True             # the model is not restored yet
 
     def resume_records(self, run, results) -> None:

@@ -1,5 +1,6 @@
 """The elastica verification scene against the inextensible elastica (docs/theory.md section 8.1), every update."""
 import csv
+import re
 
 import launch
 import pytest
@@ -59,3 +60,44 @@ def test_progress_bar_only_on_a_terminal(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "%|" not in p.stderr + p.stdout
     assert "increment   2  load 1" in p.stdout
+
+
+def _elastica_tip(E, lam=5.0):
+    """(v/L, (L - x_tip)/L, Newton iterations) of the elastica scene on a coarse mesh at lam."""
+    from mpi4py import MPI
+    scene = get_scene("elastica", [f"E={E!r}", f"lam={lam}", "n_increments=5", "size=0.25"])
+    res = scene.job(scene.mesh_data(MPI.COMM_WORLD)).run()
+    assert res.completed, res.message
+    return -res["tip_uy"][-1] / scene.L, -res["tip_ux"][-1] / scene.L, res.newton_its
+
+
+@pytest.mark.parametrize("E", [1e-100, 1e-8, 1e100])
+def test_the_elastica_at_any_scale_of_E(E):
+    """The tip load is lam E I / L^2, so the displacement does not depend on E: at E = 1e-8 (loads
+    of 1e-13, below Newton's absolute tolerance, which once accepted the unloaded state) and at
+    1e+-100 the tip lies where the elastica puts it (within the coarse mesh's 1 %) and where it lies
+    at E = 1000 (to 1e-6). (The iterations may differ by one: where the forces are below atol /
+    rtol the absolute tolerance is rtol times the force level instead of atol.)"""
+    v, xs, its = _elastica_tip(E)
+    v0, xs0, _ = _elastica_tip(1000.0)
+    assert v == pytest.approx(ELASTICA[5.0][0], rel=1e-2) and xs == pytest.approx(ELASTICA[5.0][1], rel=2e-2)
+    assert v == pytest.approx(v0, rel=1e-6) and xs == pytest.approx(xs0, rel=1e-6)
+    assert min(its) >= 1
+
+
+def test_a_young_s_modulus_beyond_double_precision_is_refused():
+    """E = 1e300: the scene refuses it in one line before anything is built; a job of the API
+    with forces whose squares overflow (E = 1e200) or underflow (1e-300) stops at its first
+    residual with the reason, without cutting back (no smaller increment helps)."""
+    import comove_dolfinx as cm
+    from comove_dolfinx.presets import SceneError
+    for E in ("1e300", "1e-300"):
+        with pytest.raises(SceneError, match=re.escape(f"E = {float(E):g}: give a Young's modulus from 1e-100 to 1e+100")):
+            get_scene("elastica", [f"E={E}"])
+    for E in (1e200, 1e-300):
+        mesh = cm.rectangle(2.0, 0.5, 0.5, order=1)
+        body = cm.Body(mesh, "plane_strain", cm.Elastic(E, 0.3), degree=1)
+        job = cm.Job(body, [cm.Fixed("left"), cm.Traction("right", (0.0, -1e-3 * E))], [cm.Step(2)])
+        res = job.run()
+        assert not res.completed and len(res) == 0 and res.cutbacks == 0
+        assert "beyond the range of double precision" in res.message and res.failures == {"diverged": 1}, res.message

@@ -5,12 +5,15 @@ The :class:`Checkpoint` writer saves converged increments (every ``every``-th, a
 ``state_NNNNN_rankR.npz`` (each rank's displacement, quadrature state, the items' state - friction
 history, obstacle positions, load factors -, the predictor's past states, and the iterate whose
 tangent Newton factorised last, rebuilt at a restart for the tangent predictor) and ``meta.json``
-(the step, the increment loop's counters, Newton's residual scale, the history rows so far), written
-last and renamed into place: it names the files of the newest complete checkpoint, which are never
-removed before it. Values are stored with the positions of their nodes and quadrature points, so
+(the step, the increment loop's counters, Newton's residual scale and force level, the history's
+columns and rows so far, the job's steps, and what the run is: its ``identity``, io/restart.py),
+written last and renamed into place: it names the files of the newest complete checkpoint, which are
+never removed before it. Values are stored with the positions of their nodes and quadrature points, so
 nothing depends on how the mesh was partitioned (which changes from run to run on several ranks).
 ``Job.run(restart=folder)`` (``comove run ... --restart``) goes on from it, on any number of ranks,
-and gives the history of the uninterrupted run.
+and gives the history of the uninterrupted run. :func:`load` refuses, before the job's writers
+touch anything, a checkpoint of another job: other history columns, another number of steps, or
+another mesh.
 """
 from __future__ import annotations
 
@@ -21,6 +24,7 @@ import pathlib
 import time
 
 import numpy as np
+from mpi4py import MPI
 
 from ..parallel import collective, on_root
 from .csv_tables import current_names
@@ -88,12 +92,13 @@ class Checkpoint(Writer):
     it. Each increment's state is taken (copied) when it converges; the files are written when a
     save is due. ``interval = 0``: every ``every``-th increment, as it converges."""
 
-    def __init__(self, folder, every: int = 1, interval: float = 0.0):
+    def __init__(self, folder, every: int = 1, interval: float = 0.0, identity: dict | None = None):
         if not (isinstance(every, int) and every >= 1):
             raise CheckpointError(f"every = {every!r}: give a whole number >= 1")
         if not (isinstance(interval, (int, float)) and 0.0 <= interval < float("inf")):
             raise CheckpointError(f"interval = {interval!r}: give a number of seconds >= 0")
         self.folder, self.every, self.interval = pathlib.Path(folder), every, float(interval)
+        self.identity = identity               # what the run is (io/restart.py), kept in meta.json
         self.count = 0
         self._pending = None                 # (increment, packed arrays, meta) not yet on disk
 
@@ -150,7 +155,9 @@ class Checkpoint(Writer):
         meta = {"increment": n, "ranks": comm.size, "step_index": run.step_index,
                 "resume": {"t": rs["t"], "dt": rs["dt"], "increment": rs["increment"], "easy": rs["easy"],
                            "past_t": [t for t, _ in rs["past"]], "use_pred": bool(rs["use_pred"])},
-                "residual_scale": newton.residual_scale, "factorised": bool(newton.factorised),
+                "residual_scale": newton.residual_scale, "force_level": newton.force_level,
+                "factorised": bool(newton.factorised), "columns": list(run.columns),
+                "steps": [int(s.n) for s in run.job.steps], "identity": self.identity,
                 "rows": list(run.job_rows), "contact": dict(run.contact_stats), "warnings": list(run.warnings),
                 "failures": run.failures,
                 "kinds": kinds}
@@ -186,10 +193,13 @@ class Checkpoint(Writer):
         self._prev = n
 
 
-def load(folder, comm) -> tuple[dict, list]:
+def load(folder, comm, job=None) -> tuple[dict, list]:
     """(meta, every rank's saved arrays) of the newest checkpoint in ``folder``; any number of
-    ranks' files are read, and matched to this run's numbering by position in ``restore``."""
-    folder = pathlib.Path(folder)
+    ranks' files are read, and matched to this run's numbering by position in ``restore``.
+    ``job``: the job that restarts (its model built), refused with a JobError unless the checkpoint
+    is one of its runs (:func:`check_job`). ``folder`` may be an io.restart.RestartPoint, whose time
+    scale and increment cap are applied here."""
+    folder = pathlib.Path(folder) if not hasattr(folder, "time_scale") else folder
     try:
         meta = json.loads((folder / "meta.json").read_text())
     except (OSError, ValueError):
@@ -205,7 +215,15 @@ def load(folder, comm) -> tuple[dict, list]:
         except (OSError, ValueError, KeyError):
             raise CheckpointError(f"{path}: missing or not a checkpoint of this version: run without "
                                   "--restart") from None
-    return _renamed(meta), parts
+    meta = _renamed(meta)
+    if job is not None:
+        check_job(folder, meta, parts, job, comm)
+    scale, dt_max = getattr(folder, "time_scale", 1.0), getattr(folder, "dt_max", None)
+    if scale != 1.0 or dt_max is not None:
+        if len(meta.get("steps", [])) != 1:
+            raise CheckpointError(f"{folder}: a new final load or increment applies to a job of one step")
+        _rescale(meta, parts, scale, dt_max)
+    return meta, parts
 
 
 def _renamed(meta: dict) -> dict:
@@ -218,6 +236,53 @@ def _renamed(meta: dict) -> dict:
     if "step" in resume and "increment" not in resume:
         resume["increment"] = resume.pop("step")
     return meta
+
+
+def check_job(folder, meta: dict, parts: list, job, comm) -> None:
+    """JobError (on every rank) unless the checkpoint in ``folder`` can be a state of ``job``: the
+    same history columns, as many steps (their counts of increments may differ), and nodes where
+    the job's mesh has its nodes."""
+    from ..job import JobError
+    columns = meta.get("columns") or (list(meta["rows"][0]) if meta.get("rows") else None)
+    if columns is not None and list(columns) != list(job.columns):
+        gone = [c for c in columns if c not in job.columns]
+        new = [c for c in job.columns if c not in columns]
+        what = "; ".join(x for x in (f"only the checkpoint has {', '.join(gone)}" if gone else "",
+                                     f"only this job has {', '.join(new)}" if new else "") if x)
+        raise JobError(f"restart from {folder}: the checkpoint's history has other columns "
+                       f"({what or 'in another order'}): restart the job that wrote it")
+    steps = meta.get("steps")
+    if (steps is not None and len(steps) != len(job.steps)) or meta["step_index"] >= len(job.steps):
+        raise JobError(f"restart from {folder}: the checkpoint is of a job with {len(steps or [])} step(s) "
+                       f"(at step {meta['step_index'] + 1}), this job has {len(job.steps)}: restart the job "
+                       "that wrote it")
+    model = getattr(job, "model", None)
+    if model is not None:
+        def fits():
+            X = np.concatenate([p["XV"] for p in parts])
+            where = set(_key(X))
+            return len(X) == model.V.dofmap.index_map.size_global and all(
+                k in where for k in _key(_local_coordinates(model, "V")))
+        if not comm.allreduce(bool(fits()), op=MPI.LAND):
+            raise JobError(f"restart from {folder}: the checkpoint's nodes are not those of this job's mesh: "
+                           "restart the job that wrote it, on the same mesh")
+
+
+def _rescale(meta: dict, parts: list, scale: float, dt_max: float | None) -> None:
+    """The checkpoint's time (the load factor of its one step) multiplied by ``scale``: the loop's
+    load factor, increment and past states, the model's and the items' factors, the rows' time
+    (their load stays); the increment at most ``dt_max``."""
+    r = meta["resume"]
+    r["t"], r["dt"] = r["t"] * scale, r["dt"] * scale
+    if dt_max is not None:
+        r["dt"] = min(r["dt"], dt_max)
+    r["past_t"] = [t * scale for t in r["past_t"]]
+    for row in meta["rows"]:
+        row["time"] = row["time"] * scale
+    for p in parts:
+        for name in list(p):
+            if name == "model_load" or (name.startswith("item") and name.endswith(("_factor", "_start", "_factor_n"))):
+                p[name] = p[name] * scale
 
 
 def restore(meta: dict, parts: list, model, newton) -> dict:
@@ -252,6 +317,7 @@ def restore(meta: dict, parts: list, model, newton) -> dict:
         p = f"item{i}_"
         items.append({k[len(p):]: local(k) for k in names if k.startswith(p)})
     newton.residual_scale = meta["residual_scale"]
+    newton.force_level = meta.get("force_level", meta["residual_scale"])   # (not in older checkpoints)
     u_fact = local("u_factorised") if meta["factorised"] else None
     model.load_state(mstate, items, u_fact, newton.A)
     if u_fact is not None:

@@ -14,16 +14,26 @@
 
 :func:`check` asks the same without writing anything (the command, before it loads dolfinx).
 The refusals are :class:`FolderError` with the path and the fix; every rank raises the same.
+
+A run that ends by an exception (Ctrl-C or SIGTERM, a full disk, an error of PETSc or of the input)
+leaves a ``run.json`` that says so: if this run wrote the folder's ``run.json`` and it still says
+``running`` (the signal came before the job's writers could close) or the exception came after the
+writers closed, ``status`` becomes ``interrupted`` (a signal) or ``failed`` (an error) with the
+one-line ``message`` of :func:`failure_line`; the temporary files of interrupted writes are removed.
 """
 from __future__ import annotations
 
+import errno
 import fcntl
+import json
 import os
 import pathlib
 import shutil
 
 RESULTS = ("history.csv", "run.json", "results.pvd", "results.xdmf", "results.h5")
 RESULT_GLOBS = ("results_*.vtu", ".results_*.tmp", "checkpoint")
+#: the temporary names of files being written (renamed into place once complete)
+TEMPORARY_GLOBS = (".*.tmp", "checkpoint/.*.tmp.npz", "checkpoint/.*.tmp")
 
 
 class FolderError(ValueError):
@@ -86,13 +96,41 @@ def check(path, overwrite: bool = False, restart: bool = False) -> str | None:
     return None
 
 
+def failure_line(err: BaseException) -> str:
+    """One line that says why a run ended by the exception ``err`` and, for a failed write, what
+    to do."""
+    if isinstance(err, KeyboardInterrupt):
+        return f"interrupted ({str(err) or 'Ctrl-C'})"
+    if isinstance(err, BrokenPipeError):
+        return "the output's pipe was closed (the command's lines went to a reader that ended): go on with --restart"
+    if isinstance(err, OSError) and err.strerror:
+        where = f" {err.filename}" if err.filename else ""
+        fix = ("free some space, or choose another --out, then go on with --restart"
+               if err.errno in (errno.ENOSPC, errno.EDQUOT) else "check the folder, then go on with --restart")
+        return f"cannot write{where}: {err.strerror} ({errno.errorcode.get(err.errno, err.errno)}): {fix}"
+    text = " ".join(str(err).split())
+    return text if isinstance(err, ValueError) and text else f"{type(err).__name__}: {text}"
+
+
+def _stamp(path: pathlib.Path):
+    """What identifies this version of a file (each write_atomic makes a new inode), or None."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_ino, st.st_mtime_ns
+
+
 class RunFolder:
+    """The output folder held for a run (the module docstring)."""
+
     def __init__(self, path, overwrite: bool = False, comm=None, restart: bool = False):
         from mpi4py import MPI
         self.path, self.overwrite, self.restart = pathlib.Path(path), overwrite, restart
         self.comm = comm or MPI.COMM_WORLD
         self.lock = self.path / ".lock"
         self._fd = None
+        self._summary = None                 # run.json as it was when the folder was taken
 
     def _acquire(self) -> int:
         """Take the folder's lock (an exclusive flock on .lock, held until the run ends); its file
@@ -127,6 +165,7 @@ class RunFolder:
             raise FolderError(f"--out {p}: cannot create the folder ({err.strerror}): choose another "
                               "place") from None
         self._fd = self._acquire()
+        self._summary = _stamp(p / "run.json")
         old = [] if self.restart else _old_results(p)      # a restart goes on where it stopped
         for f in old:
             target = p / f
@@ -140,9 +179,34 @@ class RunFolder:
         on_root(self.comm, self._take)
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, exc, tb):
         if self._fd is not None:             # rank 0: remove the file while still holding it
+            if exc is not None:
+                try:
+                    self._ended_by(exc)
+                except OSError:              # (a full disk): the exception says it already
+                    pass
             self.lock.unlink(missing_ok=True)
             os.close(self._fd)
             self._fd = None
         return False
+
+    def _ended_by(self, exc: BaseException) -> None:
+        """run.json says how the run ended, if this run wrote it (the module docstring); the
+        temporary files of unfinished writes are removed."""
+        for pattern in TEMPORARY_GLOBS:
+            for f in self.path.glob(pattern):
+                f.unlink(missing_ok=True)
+        path = self.path / "run.json"
+        if _stamp(path) in (None, self._summary):
+            return                           # not written by this run: left as it was
+        try:
+            info = json.loads(path.read_text())
+        except ValueError:
+            info = {}
+        signal = isinstance(exc, KeyboardInterrupt)
+        if signal and info.get("status") != "running":
+            return                           # the writers said it (interrupted) already
+        info.update(status="interrupted" if signal else "failed", completed=False, message=failure_line(exc))
+        from .writers import write_atomic
+        write_atomic(path, json.dumps(info, indent=1, default=str))

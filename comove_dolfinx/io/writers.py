@@ -72,8 +72,12 @@ def write_atomic(path: pathlib.Path, text: str) -> None:
     """Write a file under a temporary name and rename it into place: a reader (or a kill) never
     sees half of it."""
     tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except BaseException:                    # (a full disk, a signal): no half-written file left
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 class RunInfo(Writer):
@@ -84,10 +88,14 @@ class RunInfo(Writer):
     starts (``"status": "running"``) and after an increment at most every ``interval`` seconds, so
     that a run that is killed leaves a summary that says it is incomplete and about how far it got
     (history.csv has every increment); at the end ``"status"`` is ``"completed"``, ``"stopped"`` (an
-    increment could not be solved) or ``"interrupted"``."""
+    increment could not be solved) or ``"interrupted"``; the command's output folder turns a
+    ``running`` left by a signal during start-up into ``"interrupted"``, and a run ended by an error
+    into ``"failed"``, each with its message (io/folder.py). ``identity``: what the run is (scene
+    and parameters, or problem file and its hash, the package version: io/restart.py)."""
 
-    def __init__(self, path, parameters: dict | None = None, interval: float = 1.0):
+    def __init__(self, path, parameters: dict | None = None, interval: float = 1.0, identity: dict | None = None):
         self.path, self.parameters, self.interval = pathlib.Path(path), parameters or {}, interval
+        self.identity = identity             # what the run is (io/restart.py), if known
         self.rows = 0
         self._written = -float("inf")
 
@@ -95,6 +103,8 @@ class RunInfo(Writer):
         info = {"parameters": self.parameters, "status": status, "completed": status == "completed",
                 "message": message, "increments": self.rows, "ranks": run.comm.size,
                 "warnings": list(run.warnings), "failures": run.failures}
+        if self.identity is not None:
+            info["identity"] = self.identity
         if results is not None:
             info.update(increments=len(results.increments), newton_its=results.newton_its,
                         failed_its=results.failed_its, failures=dict(results.failures),

@@ -25,6 +25,12 @@ RENAMED = {"n_steps": "n_increments"}
 # dolfinx, gmsh and the rest are imported by the methods that build: checking parameters stays light
 
 
+#: Young's moduli a scene accepts: the residual's norm squares forces of the order of E (times
+#: lengths), which leave double precision (1e-308 to 1e308) beyond about 1e154 and below 1e-154;
+#: inside this range the elastica follows its closed form (tests/test_elastica.py)
+E_RANGE = (1e-100, 1e100)
+
+
 class SceneError(ValueError):
     """A scene name or parameter that cannot be used; the message says what to do."""
 
@@ -39,6 +45,11 @@ class Scene:
     summary: ClassVar[str] = ""
     kind: ClassVar[str] = ""
     columns: ClassVar[tuple[str, ...]] = ()
+    #: the parameter whose value is the history's ``load`` at the end of the loading
+    load_parameter: ClassVar[str] = ""
+    #: parameters that shape what a checkpoint holds (the mesh and its fields, the stress update,
+    #: the items and their geometry): a restart cannot change them (:meth:`restart_change_error`)
+    fixed_at_restart: ClassVar[tuple[str, ...]] = ("mesh", "size", "degree", "order", "update")
     doc: ClassVar[dict[str, str]] = {
         "E": "Young's modulus [kgf/cm^2]", "nu": "Poisson's ratio",
         "update": f"stress update: {', '.join(UPDATES)}",
@@ -84,6 +95,10 @@ class Scene:
         if why:
             raise SceneError(why)
         self.elastic()
+        if not E_RANGE[0] <= self.E <= E_RANGE[1]:
+            raise SceneError(f"E = {self.E:g}: give a Young's modulus from {E_RANGE[0]:g} to {E_RANGE[1]:g} "
+                             "(the solver takes norms of forces of the order of E, whose squares must "
+                             "stay within double precision): state the scene in other units")
         if self.mesh and not os.path.isfile(self.mesh):
             raise SceneError(f"mesh = {self.mesh!r}: no such file; give the path of a Gmsh .msh file")
         if self.update not in UPDATES:
@@ -155,7 +170,22 @@ class Scene:
     @property
     def load_max(self) -> float:
         """Value of the history's ``load`` column at the end of the loading."""
-        raise NotImplementedError
+        return getattr(self, self.load_parameter)
+
+    def restart_change_error(self, key: str, old, reached: float | None) -> str | None:
+        """Why the parameter ``key`` cannot go from ``old`` (the checkpoint's run) to this scene's
+        value at a restart whose history has reached the load ``reached`` (None: no row), or None.
+        The parameters of :attr:`fixed_at_restart` never change; the final load cannot go below the
+        load reached, nor change sign."""
+        new = getattr(self, key)
+        if key in self.fixed_at_restart:
+            return (f"{key} cannot change at a restart: it shapes what the checkpoint holds (mesh, "
+                    "fields, items): start afresh with --overwrite")
+        if key == self.load_parameter and reached is not None and (
+                abs(new) < abs(reached) or new * reached < 0):
+            return (f"{key} = {new:g} is short of the load the run has reached ({reached:g}): give a final "
+                    f"load beyond it")
+        return None
 
     def fibres(self) -> list:
         """(name, reference direction) of the fibres whose normal stress goes to the XDMF output."""
@@ -208,6 +238,8 @@ class ContactScene(Scene):
         "friction": "friction law: lagged (the paper's scheme, tangential weight gamma0) or coulomb "
                     "(current pressure, tangential weight min(gamma0, 10))"}
 
+    fixed_at_restart: ClassVar[tuple[str, ...]] = (*Scene.fixed_at_restart, "gap", "contact", "friction")
+
     gap: float = 1.0
     mu: float = 0.1
     contact: str = "penalty"
@@ -232,6 +264,14 @@ class ContactScene(Scene):
             raise SceneError(f"friction = {self.friction!r}: choose {' or '.join(FRICTION_LAWS)}")
         if self.relag and self.friction != "lagged":
             raise SceneError("relag = true re-solves the lagged law: set friction = lagged")
+
+    def restart_change_error(self, key: str, old, reached: float | None) -> str | None:
+        """As the scene's; besides, friction cannot be switched on or off (``mu`` from or to 0):
+        the checkpoint holds the friction history only with friction."""
+        if key == "mu" and (old == 0) != (self.mu == 0):
+            return ("mu cannot go from or to 0 at a restart: the checkpoint holds a friction history "
+                    "only with friction: start afresh with --overwrite")
+        return super().restart_change_error(key, old, reached)
 
     def newton_settings(self):
         """The paper's friction scheme keeps the line search on ||R|| that its stored histories

@@ -49,6 +49,8 @@ class Elastica(Scene):
     """Verification: cantilever under a dead vertical tip load (Mattiasson's elastica, docs/theory.md section 8.1)."""
 
     name: ClassVar[str] = "elastica"
+    load_parameter: ClassVar[str] = "lam"
+    fixed_at_restart: ClassVar[tuple[str, ...]] = (*Scene.fixed_at_restart, "L", "h")
     summary: ClassVar[str] = ("cantilever L=10, h=0.25 (plane stress), dead tip load "
                               "lam = P L^2/(E I); compare with the elastica")
     kind: ClassVar[str] = "plane_stress"
@@ -69,10 +71,6 @@ class Elastica(Scene):
     def mesh_data(self, comm):
         return _strip_mesh(self, comm, ("left", "right"))
 
-    @property
-    def load_max(self):
-        return self.lam
-
     def build(self, md):
         from .build import Body, Fixed, NodeDisplacement, Traction
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
@@ -90,6 +88,8 @@ class Beam(ContactScene):
     """Cantilever pressed onto a rigid foundation by a follower pressure (docs/scenes.md)."""
 
     name: ClassVar[str] = "beam"
+    load_parameter: ClassVar[str] = "q_max"
+    fixed_at_restart: ClassVar[tuple[str, ...]] = (*ContactScene.fixed_at_restart, "L", "h")
     summary: ClassVar[str] = ("cantilever L=10, h=0.5 (plane stress) under follower pressure q "
                               "up to 0.5, rigid plane 3 below, mu = 0.1")
     kind: ClassVar[str] = "plane_stress"
@@ -110,10 +110,6 @@ class Beam(ContactScene):
     def mesh_data(self, comm):
         return _strip_mesh(self, comm, ("left", "top", "bottom"))
 
-    @property
-    def load_max(self):
-        return self.q_max
-
     def build(self, md):
         from .build import Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero
         body = Body(md, self.kind, self.elastic(), update=self.update, degree=self.degree)
@@ -133,6 +129,8 @@ class Plate(ContactScene):
     """Thick circular plate pressed onto a rigid base (axisymmetric, docs/scenes.md)."""
 
     name: ClassVar[str] = "plate"
+    load_parameter: ClassVar[str] = "p_max"
+    fixed_at_restart: ClassVar[tuple[str, ...]] = (*ContactScene.fixed_at_restart, "R", "t", "z_support")
     summary: ClassVar[str] = ("circular plate R=10, t=2 (axisymmetric), follower pressure p up to "
                               "10, lower rim held in z, rigid base 1.5 below, mu = 0.1")
     kind: ClassVar[str] = "axisymmetric"
@@ -166,10 +164,6 @@ class Plate(ContactScene):
         from .build import geometry
         return geometry.plate_section(self.R, self.t, self.z_support, self.size,
                                       order=self.geometry_order, comm=comm)
-
-    @property
-    def load_max(self):
-        return self.p_max
 
     def build(self, md):
         from .build import Body, ContactForce, ContactLength, Fixed, NodeDisplacement, Plane, Pressure, or_zero
@@ -219,6 +213,8 @@ class Ring(ContactScene):
     """
 
     name: ClassVar[str] = "ring"
+    load_parameter: ClassVar[str] = "delta_max"
+    fixed_at_restart: ClassVar[tuple[str, ...]] = (*ContactScene.fixed_at_restart, "R_out", "wall", "law", "plane")
     summary: ClassVar[str] = ("ring OD 11.43, wall 0.866 (quarter, plane strain, J2 mild steel) "
                               "crushed between rigid plates to delta = 6.6, mu = 0.1")
     kind: ClassVar[str] = "plane_strain"
@@ -294,10 +290,6 @@ class Ring(ContactScene):
         from .build import geometry
         return geometry.annulus_sector(self.R_out - self.wall, self.R_out, self.size,
                                        order=self.geometry_order, comm=comm)
-
-    @property
-    def load_max(self):
-        return self.delta_max
 
     def build(self, md):
         from .build import (Body, ContactForce, ContactLength, CrownGap, Fixed, MaxPlasticStrain,

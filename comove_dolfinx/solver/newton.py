@@ -6,12 +6,19 @@ the matrix, vectors and KSP are created once and reused, so MUMPS's symbolic ana
 The linear solver reads PETSc options under the prefix ``comove_`` (linear.py): another direct
 solver or ordering, or an iterative solver (GMRES with algebraic multigrid).
 
-Convergence: ||R|| <= rtol * R_scale + atol, with R_scale (``scale``) either the largest initial
-residual norm of the increments so far ("initial", a force scale of the run, which depends on the
-increment size), or the norm of the internal force vector F_int = int P : Grad v at the iterate
-("force": at equilibrium the applied loads, reactions and contact forces, so rtol bounds the
-out-of-balance force as a fraction of the forces the body carries; the residual is then assembled
-as F_int plus the items' terms, so that F_int comes with it), or a Newton correction
+Convergence: ||R|| <= rtol * R_scale + min(atol, rtol * F_run), with R_scale (``scale``) either the
+largest initial residual norm of the increments so far ("initial", a force scale of the run, which
+depends on the increment size), or the norm of the internal force vector F_int = int P : Grad v at
+the iterate ("force": at equilibrium the applied loads, reactions and contact forces, so rtol bounds
+the out-of-balance force as a fraction of the forces the body carries; the residual is then
+assembled as F_int plus the items' terms, so that F_int comes with it). The absolute tolerance atol
+(in units of force) is capped at rtol times F_run, the largest force the run has met (its largest
+initial residual of an increment, and with scale "force" its largest ||F_int||): a problem whose
+forces are all of the order of atol or below (a Young's modulus of 1e-8, or units in which the
+loads are 1e-13) is held to the relative test and never accepted at its unloaded state, while a
+problem whose forces exceed atol / rtol is tested exactly as with the plain atol. A residual whose
+norm is not finite (forces beyond the range of double precision) is never accepted: the solve
+fails at once, and no smaller increment is tried. Or a Newton correction
 ||du|| <= stol * ||u|| (the residual of a stiff body stalls at a round-off floor set by its
 internal forces, which can exceed rtol * R_scale when the load increments are small; only a full
 step counts). Corrections are scaled by the line searches of linesearch.py. A failure of the
@@ -170,6 +177,7 @@ class Newton(LineSearches):
         self.hopeless = False              # the last linear solve failed in a way that no smaller
                                            # increment cures (linear.HOPELESS_CODES)
         self.residual_scale = 0.0
+        self.force_level = 0.0             # the largest force the run has met (F_run: the cap of atol)
         self.history: list[tuple[float, float]] = []
         self.poll = None                   # called by every rank before each iteration (a job's
                                            # collective check for Ctrl-C and SIGTERM: parallel.py)
@@ -253,7 +261,8 @@ class Newton(LineSearches):
         self._notify("iteration", it, rnorm)
         if s.scale == "force":                  # F_int of the residual just evaluated
             self.residual_scale = self._f.norm()
-        return rnorm <= s.rtol * self.residual_scale + s.atol
+            self.force_level = max(self.force_level, self.residual_scale)
+        return bool(np.isfinite(rnorm)) and rnorm <= self.tolerance
 
     def solve(self) -> tuple[bool, int, str]:
         """Iterate from the current ``model.u``; returns (converged, iterations, reason), also to
@@ -296,6 +305,22 @@ class Newton(LineSearches):
         self.model.comm.Allreduce(MPI.IN_PLACE, changed, op=MPI.MAX)
         return int(changed.sum())
 
+    def _out_of_range(self, r0: float) -> tuple[str, int, str] | None:
+        """(cause, iterations, reason) of a first residual whose norm is not finite or is 0 while
+        its entries are not, or None. A norm that overflows (or underflows to 0) from finite entries
+        means forces beyond the range of double precision, which no smaller increment brings back
+        (``hopeless``); entries that are not finite are an iterate led astray (a predictor's),
+        which a smaller increment from the last state may cure."""
+        largest = self.b.norm(PETSc.NormType.NORM_INFINITY)
+        if r0 == 0.0 and largest == 0.0:
+            return None                        # in equilibrium as it stands
+        if np.isfinite(largest):
+            self.hopeless = True
+            return (failures.DIVERGED, 0, f"the residual's norm is {r0:g} for a largest entry of {largest:.3g}: "
+                    "the forces are beyond the range of double precision's squares (1e-154 to 1e154); "
+                    "state the problem in other units (E and the loads nearer 1)")
+        return failures.DIVERGED, 0, f"the residual is not finite (|R| = {r0})"
+
     def _iterate(self) -> tuple[bool, int, str]:
         m, s = self.model, self.settings
         self.history = []
@@ -306,8 +331,13 @@ class Newton(LineSearches):
         except (InvertedElement, ReturnMapFailure) as err:
             return self._fail(failures.INADMISSIBLE, 0, str(err))
         self._residuals.append(r0)
+        if not np.isfinite(r0) or r0 == 0.0:          # (0: nothing to do, or an underflow)
+            why = self._out_of_range(r0)
+            if why is not None:
+                return self._fail(*why)
         if self.contacts:
             self._sets.append(self._contact_set())
+        self.force_level = max(self.force_level, r0)
         if s.scale == "initial":
             self.residual_scale = max(self.residual_scale, r0)
         for it in range(1, s.max_it + 1):
@@ -353,8 +383,10 @@ class Newton(LineSearches):
 
     @property
     def tolerance(self) -> float:
-        """The residual norm the last solve had to reach (rtol times its scale plus atol)."""
-        return self.settings.rtol * self.residual_scale + self.settings.atol
+        """The residual norm the last solve had to reach: rtol times its scale plus atol, atol at
+        most rtol times the largest force the run has met (the module docstring)."""
+        s = self.settings
+        return s.rtol * self.residual_scale + min(s.atol, s.rtol * self.force_level)
 
     def along(self, steps, look=None) -> list[tuple]:
         """(a, s(a), f(a), seen) for each step a along the current correction du: s(a) = du . R(u +
