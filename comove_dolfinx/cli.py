@@ -13,8 +13,8 @@ is loaded where possible); 130 Ctrl-C and 143 SIGTERM, at any moment from the st
 """
 from __future__ import annotations
 
-import logging
-import sys
+import sys          # (a builtin module: loaded already; everything else is imported after main()
+                    # has taken Ctrl-C and SIGTERM, command_signals.py)
 
 #: seconds between checkpoints at least (the last increment is saved when a run ends): a restart
 #: after a kill -9 repeats at most this much work, and a short run writes one checkpoint
@@ -23,6 +23,7 @@ CHECKPOINT_INTERVAL = 5.0
 
 def _quiet_jit() -> None:
     # ffcx/cffi report every compilation through the root logger at INFO level
+    import logging
     logging.disable(logging.INFO)
 
 
@@ -36,6 +37,7 @@ def _scenes() -> int:
 
 
 def _verbose(comm) -> None:
+    import logging
     logging.disable(logging.NOTSET)
     logger = logging.getLogger("comove")
     logger.setLevel(logging.INFO)
