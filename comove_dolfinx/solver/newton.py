@@ -155,6 +155,7 @@ class Newton(LineSearches):
             krylov.options_for(self.linear_solver, self.settings.petsc_options or {}))
         self.iterative = not linear.is_direct(self.ksp)   # multigrid: the rigid motions at each tangent
         self.krylov_its: list[int] = []    # Krylov iterations of each linear solve of the last solve()
+        self.linear_solves = self.krylov_total = 0     # over the Newton's life (benchmarks, summaries)
         ls = self.settings.line_search
         if ls is None:       # friction: the energy search stops in the stick band (theory.md 7.1)
             contacts = [item for item in model.items if item.kind == "contact"]
@@ -222,6 +223,8 @@ class Newton(LineSearches):
             self.workspace = grown[-1]
         self.hopeless = False
         self.krylov_its.append(krylov.iterations(self.ksp))
+        self.linear_solves += 1
+        self.krylov_total += self.krylov_its[-1]
         self._linear_cause = failures.LINEAR
         if failure is None:
             reason = self.ksp.getConvergedReason()
