@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import numbers
 
-from .choices import CONVERGENCE_SCALES, LINE_SEARCHES
+from .choices import CONVERGENCE_SCALES, LINE_SEARCHES, LINEAR_SOLVERS
 
 #: the most cells a built-in mesh may have: beyond it Gmsh runs out of memory (std::bad_alloc) long
 #: before a run could be solved on one machine
@@ -113,6 +113,7 @@ NEWTON_CHECKS = {
     "energy_eta": lambda n, v: number(n, v, gt=0, le=1),
     "scale": lambda n, v: choice(n, v, CONVERGENCE_SCALES),
     "petsc_options": lambda n, v: petsc_options_error(v),
+    "linear_solver": lambda n, v: choice(n, v, LINEAR_SOLVERS),
     "monitor": lambda n, v: None,
 }
 

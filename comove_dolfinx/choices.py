@@ -17,6 +17,8 @@ LAWS = ("j2", "chen")
 LINE_SEARCHES = (None, True, False, "residual", "energy", "none")
 #: NewtonSettings.scale: what rtol is relative to (solver/newton.py)
 CONVERGENCE_SCALES = ("initial", "force")
+#: NewtonSettings.linear_solver: direct, GMRES + GAMG, GMRES + BoomerAMG, by size (solver/krylov.py)
+LINEAR_SOLVERS = ("mumps", "gamg", "hypre", "auto")
 
 
 def first_increment_error(first, max_cutbacks: int) -> str | None:

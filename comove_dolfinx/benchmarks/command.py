@@ -1,9 +1,10 @@
 """The command line of the benchmarks: ``python -m comove_dolfinx.benchmarks STUDY [options]``.
 
-STUDY is one of floor, parts, solvers, scale, slopes (the modules of this package say what each
+STUDY is one of floor, parts, solvers, scale, slopes, krylov (the modules of this package say what each
 measures). Options: ``--out DIR`` (results/cost), ``--repeats N``, ``--increments N``, ``--sizes``
 (comma-separated mesh sizes of the ring), ``--solvers`` (comma-separated configurations of
-:data:`~comove_dolfinx.benchmarks.linear_solvers.SOLVERS`), ``--scenes`` (scale) and
+:data:`~comove_dolfinx.benchmarks.linear_solvers.SOLVERS`; for krylov the names of
+``NewtonSettings.linear_solver``), ``--scenes`` (scale; krylov: one scene) and
 ``--set key=value`` (repeatable: a parameter of the ring scene for floor and slopes). A bad option or
 scene parameter is a one-line usage error before any run.
 """
@@ -16,7 +17,7 @@ import pathlib
 from ..presets import SceneError, get_scene
 
 PROG = "python -m comove_dolfinx.benchmarks"
-STUDIES = ("floor", "parts", "solvers", "scale", "slopes")
+STUDIES = ("floor", "parts", "solvers", "scale", "slopes", "krylov")
 
 
 def _parser(prog: str) -> argparse.ArgumentParser:
@@ -28,9 +29,10 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument("--repeats", type=int, default=None,
                    help="runs per figure (floor, solvers, scale: 3) or calls per timing (parts: 40)")
     p.add_argument("--increments", type=int, default=None, help="nominal increments of each short run")
-    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers, slopes)")
+    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers, slopes, krylov)")
     p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
-    p.add_argument("--scenes", default="ring,plate", help="comma-separated scenes (scale)")
+    p.add_argument("--scenes", default=None, help="comma-separated scenes (scale: ring,plate; "
+                   "krylov: one scene, plate)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="overrides",
                    help="a parameter of the ring scene for its runs (floor, slopes), e.g. predictor=linear")
     return p
@@ -40,6 +42,8 @@ def _check(p: argparse.ArgumentParser, a: argparse.Namespace, ranks: int) -> Non
     """Usage errors (argparse's exit 2 with one line) for what the studies cannot take."""
     if a.overrides and a.study not in ("floor", "slopes"):
         p.error("--set applies to the floor and slopes studies only")
+    if a.study == "krylov" and a.scenes and "," in a.scenes:
+        p.error("krylov takes one scene (--scenes plate)")
     if a.study == "parts" and ranks > 1:
         p.error("parts times one rank: run it without mpirun")
     try:
@@ -68,10 +72,15 @@ def _run(a: argparse.Namespace, out: pathlib.Path) -> None:
     elif a.study == "solvers":
         from .linear_solvers import solvers
         solvers(out, names=a.solvers.split(",") if a.solvers else None, **kw)
+    elif a.study == "krylov":
+        from .multigrid import NAMES, krylov
+        names = tuple(a.solvers.split(",")) if a.solvers else NAMES
+        krylov(out, scene=a.scenes or "plate", names=names, **kw)
     else:
         from .ranks import SCALE, scale
         names = tuple(a.solvers.split(",")) if a.solvers else ("mumps_auto", "gmres_gamg")
-        scale(out, scenes={k: SCALE[k] for k in a.scenes.split(",")}, solver_names=names, **kw)
+        scenes = (a.scenes or "ring,plate").split(",")
+        scale(out, scenes={k: SCALE[k] for k in scenes}, solver_names=names, **kw)
 
 
 def main(argv=None, prog: str = PROG) -> None:

@@ -67,16 +67,17 @@ def _count_residuals(newton: Newton, calls: dict) -> None:
 
 
 def short_run(name: str, size: float, increments: int, options: dict | None = None,
-              count: bool = False, between=None, overrides=(), monitor=None) -> dict:
+              count: bool = False, between=None, overrides=(), monitor=None,
+              linear_solver: str = "mumps") -> dict:
     """The scene's first ``increments`` nominal increments (its own predictor and Newton settings,
     the linear solver's ``options``): CPU and wall time of the run (max over ranks for wall, sum
     for CPU), iterations (failed ones included), residual evaluations, the Timer's split.
     ``between``: called after every converged increment, its CPU time taken out of the run's.
     ``overrides``: scene parameters, "key=value" (the predictor, ...); ``monitor``: Newton's
-    (solver/newton.py)."""
+    (solver/newton.py); ``linear_solver``: NewtonSettings.linear_solver (the options come after it)."""
     scene, model = build(name, size, overrides)
     settings = dataclasses.replace(scene.newton_settings(), petsc_options=dict(options or {}),
-                                   monitor=monitor)
+                                   monitor=monitor, linear_solver=linear_solver)
     steps = dataclasses.replace(scene.steps()[0].settings(), n_increments=increments,
                                 t_end=increments / scene.n_increments)
     timer = Timer(time.process_time)

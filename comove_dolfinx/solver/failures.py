@@ -15,7 +15,9 @@ Causes (the counting keys, plain strings so that they go to JSON as they are):
 * ``MAX_IT``: ``max_it`` iterations without meeting the tolerance;
 * ``DIVERGED``: ||R|| grew beyond ``divergence`` times the first residual of the increment, or
   became infinite;
-* ``LINEAR``: the linear solver failed, or its correction was not finite (singular tangent).
+* ``LINEAR``: the linear solver failed, or its correction was not finite (singular tangent);
+* ``KRYLOV``: the iterative linear solver (``NewtonSettings.linear_solver`` "gamg" or "hypre", or a
+  Krylov method of the PETSc options) stopped without reaching its tolerance.
 """
 from __future__ import annotations
 
@@ -28,7 +30,8 @@ INADMISSIBLE = "inadmissible"
 MAX_IT = "max_it"
 DIVERGED = "diverged"
 LINEAR = "linear_solver"
-CAUSES = (INADMISSIBLE, MAX_IT, DIVERGED, LINEAR)
+KRYLOV = "krylov"
+CAUSES = (INADMISSIBLE, MAX_IT, DIVERGED, LINEAR, KRYLOV)
 
 #: what a fall of ||R|| per iteration must stay below, over the last iterations, to count as steady
 STEADY_RATIO = 0.9
@@ -113,6 +116,9 @@ def advice(failure: Failure | None, *, contact: bool = False, friction: bool = F
         start = "" if predictor else ", or predictor=\"tangent\" (a start on the path's tangent)"
         return (f"an iterate inverted an element or left the stress update's range: take {more}{start}; "
                 "if it persists, refine the mesh where the body deforms most")
+    if failure.cause == KRYLOV:
+        return ("the iterative linear solver did not converge: raise its iteration limit "
+                "(petsc_options ksp_max_it) or use the direct solver (NewtonSettings linear_solver=\"mumps\")")
     if failure.cause == LINEAR:
         return ("the tangent is singular or the linear solver failed: add a support if the body can "
                 "move rigidly, or check the solver's options (NewtonSettings.petsc_options)")

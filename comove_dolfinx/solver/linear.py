@@ -9,8 +9,8 @@ petsc``, ``-comove_mat_mumps_icntl_7 5``, ``-comove_ksp_type gmres -comove_pc_ty
 ``NewtonSettings.petsc_options`` (keys without the prefix). The settings' options are put into
 PETSc's global database only while this solver reads them (set-up and every solve: MUMPS and GAMG
 read theirs at the factorisation, not at ``setFromOptions``) and removed afterwards, so two models
-never share them. A solver that is not a factorisation (an iterative one) gets the rigid-body modes
-of the 2-D displacement space as the matrix's near-nullspace (for algebraic multigrid).
+never share them. The iterative path (GMRES with algebraic multigrid, and the rigid motions of the
+current configuration as the matrix's near-nullspace at every tangent) is krylov.py's.
 """
 from __future__ import annotations
 

@@ -59,7 +59,7 @@ from petsc4py import PETSc
 from .. import compat
 from ..checks import SettingsError, SolverOptionError, newton_field_error
 from ..mechanics.model import InvertedElement, Model, ReturnMapFailure
-from . import failures, linear
+from . import failures, krylov, linear
 from .linesearch import LineSearches
 
 log = logging.getLogger("comove")
@@ -126,6 +126,8 @@ class NewtonSettings:
                                    # residual of the run; "force", ||F_int|| of the iterate
     petsc_options: dict = field(default_factory=dict)   # the linear solver's PETSc options, keys
                                    # without the prefix comove_: {"pc_factor_mat_solver_type": "petsc"}
+    linear_solver: str = "mumps"   # "mumps", "gamg", "hypre" (GMRES + algebraic multigrid) or "auto"
+                                   # (by the number of dofs): krylov.py; petsc_options come after it
     monitor: object | None = None  # an observer of the iterations (methods iteration, rejected,
                                    # solved: the module docstring), e.g. stability.Recorder
 
@@ -153,10 +155,14 @@ class Newton(LineSearches):
         self.settings.check()              # (its fields may have been changed since it was made)
         self.timer = timer or Timer()
         self.b = compat.create_vector(model.residual_form)
+        self.linear_solver = krylov.chosen(self.settings.linear_solver, model.num_dofs(),
+                                           model.V.dofmap.index_map_bs)
         self.ksp, self.A, self.petsc_options = linear.make_solver(
-            model.comm, model.jacobian_form, self.settings.petsc_options or {})
-        if not linear.is_direct(self.ksp):       # algebraic multigrid needs the rigid-body modes
-            self.A.setNearNullSpace(linear.rigid_body_modes(model.V, self.A))
+            model.comm, model.jacobian_form,
+            krylov.options_for(self.linear_solver, self.settings.petsc_options or {}))
+        self.iterative = not linear.is_direct(self.ksp)   # multigrid: the rigid motions at each tangent
+        self.krylov_its: list[int] = []    # Krylov iterations of each linear solve of the last solve()
+        self.linear_solves = self.krylov_total = 0     # over the Newton's life (benchmarks, summaries)
         ls = self.settings.line_search
         if ls is None:       # friction: the energy search stops in the stick band (theory.md 7.1)
             contacts = [item for item in model.items if item.kind == "contact"]
@@ -174,6 +180,7 @@ class Newton(LineSearches):
         self._last_trial = None               # (alpha, ||R||) of the line search's last trial
         self.factorised = False            # the KSP holds the LU factors of a tangent
         self.workspace = None              # ICNTL(14) (per cent) once MUMPS's workspace was raised
+        self._linear_cause = failures.LINEAR   # of the last linear solve's failure
         self.hopeless = False              # the last linear solve failed in a way that no smaller
                                            # increment cures (linear.HOPELESS_CODES)
         self.residual_scale = 0.0
@@ -223,9 +230,15 @@ class Newton(LineSearches):
         if grown:
             self.workspace = grown[-1]
         self.hopeless = False
+        self.krylov_its.append(krylov.iterations(self.ksp))
+        self.linear_solves += 1
+        self.krylov_total += self.krylov_its[-1]
+        self._linear_cause = failures.LINEAR
         if failure is None:
             reason = self.ksp.getConvergedReason()
-            if reason < 0:
+            if reason < 0 and self.iterative:
+                failure, self._linear_cause = krylov.not_converged(self.ksp), failures.KRYLOV
+            elif reason < 0:
                 why = linear.factor_error(self.ksp)
                 failure = f"the linear solver failed (PETSc KSP reason {reason}{'; ' + why if why else ''})"
                 self.hopeless = linear.mumps_code(self.ksp) in linear.HOPELESS_CODES
@@ -325,6 +338,7 @@ class Newton(LineSearches):
         m, s = self.model, self.settings
         self.history = []
         self.failure = None
+        self.krylov_its = []
         self._residuals, self._sets = [], []
         try:
             r0 = rnorm = self.residual()
@@ -347,11 +361,13 @@ class Newton(LineSearches):
                 return True, it - 1, "converged"
             with self.timer("jacobian"):
                 compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
+                if self.iterative:
+                    krylov.set_near_nullspace(m.V, self.A, self._u)
             self.u_factorised = self._u.copy()        # a checkpoint rebuilds this tangent
             with self.timer("solve"):
                 failure = self._solve_linear()
             if failure is not None:
-                return self._fail(failures.LINEAR, it, failure)
+                return self._fail(self._linear_cause, it, failure)
             self.factorised = True
             dnorm = self._du_vec.norm()
             if not np.isfinite(dnorm):
