@@ -170,8 +170,9 @@ class Pressure(Item):
         N = ufl.FacetNormal(ctx.mesh)
         F = ctx.update.F(ctx.u)
         cof = ufl.det(F) * ufl.inv(F).T
-        if ctx.kin.solid:
-            return self._c * ufl.dot(cof * N, ctx.v) * ctx.ds(self.boundary)
+        if ctx.kin.solid:       # cof F (quadratic in Grad u) N . v: degree 2 k on a flat face
+            ds = ctx.ds(self.boundary, {"quadrature_degree": 2 * ctx.degree})
+            return self._c * ufl.dot(cof * N, ctx.v) * ds
         v3 = ufl.as_vector([ctx.v[0], ctx.v[1], 0.0])
         return -(-self._c * ufl.dot(cof * ufl.as_vector([N[0], N[1], 0.0]), v3) * ctx.weight
                  * ctx.ds(self.boundary))
