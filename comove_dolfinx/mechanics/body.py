@@ -27,7 +27,7 @@ class Body:
     kind : str
         "plane_strain", "plane_stress" (forces per unit thickness), "axisymmetric" (x = r, y = z;
         forces are totals over the circumference) or "solid" (3D: three displacement components,
-        the full 3x3 kinematics; docs/theory.md section 7).
+        the full 3x3 kinematics; docs/theory.md section 1.4).
     material : Elastic, J2 or Chen
         Elastic constants, or an elastic-plastic law with its hardening.
     update : str

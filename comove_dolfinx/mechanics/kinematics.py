@@ -233,7 +233,7 @@ def sr_decomposition_direction(H, G):
         dc = -(W:dW) / (2 c),  dk = -k^2 dc,  d(W.W) = dW.W + W.dW,
         dR = dW + k d(W.W) + dk W.W,  dS = sym G - k d(W.W) - dk W.W
 
-    (docs/theory.md, "Three dimensions"); defined wherever the split is (c > 0)."""
+    (docs/theory.md section 1.4); defined wherever the split is (c > 0)."""
     W, dW = ufl.skew(H), ufl.skew(G)
     WW, dWW = W * W, dW * W + W * dW
     c = ufl.sqrt(1.0 - 0.5 * ufl.inner(W, W))
