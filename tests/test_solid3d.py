@@ -108,6 +108,11 @@ def test_jacobian_is_exact_3d(cache, case):
         yielding = m.comm.allreduce(int(np.sum(m.p.x.array > m.p_n.x.array)), op=MPI.SUM)
         assert yielding > 0, "no point is yielding"
     result = taylor_test(m, h0=1e-4, n=8)
+    if case == {"update": "small_strain"}:
+        # linear kinematics, elastic, dead loads: the residual is linear in u, the remainder is
+        # round-off from the first step on (a Jacobian missing a part would leave it at O(h))
+        assert result.remainders.max() < 1e-10 * result.first_order.max(), str(result)
+        return
     assert np.all(np.abs(result.orders[-3:] - 2.0) < 0.15), str(result)
 
 
