@@ -19,7 +19,8 @@ them from inside a gmsh session of your own. For a session of your own (meshing 
 demos/demo_seal.py does), ``gmsh_session.start()``/``stop()`` keep Python's Ctrl-C handler, which
 gmsh's own calls replace by the system's default (the process then dies at Ctrl-C without a word).
 """
-from .builders import annulus_sector, box, necking_bar, necking_bar_grid, plate_section, quarter_disc, rectangle
+from .builders import annulus_sector, necking_bar, necking_bar_grid, plate_section, quarter_disc, rectangle
+from .builders3d import box
 from .meshes import (
            BODY_TAG,
            MeshData,
