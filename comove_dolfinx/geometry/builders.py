@@ -381,4 +381,3 @@ def necking_bar(R: float = 6.413, L: float = 53.334, reduction: float = 0.018, n
 
     _not_too_fine("necking_bar", params)
     return build_cached("necking_bar", params, construct, comm, cache_dir)
-
