@@ -191,11 +191,14 @@ CELLS = {
         max(math.ceil(p.get("angle", math.pi / 2) * 0.5 * (p["r_in"] + p["r_out"]) / p["size"]), 1)),
     "quarter_disc": _cells_quarter_disc,
     "necking_bar": lambda p: _structured(p.get("n_r", 5), p.get("n_z", 40)),
+    # box: the rectangle's triangles extruded in layers, each prism cut into 3 tetrahedra
+    "box": lambda p: 3 * _structured(math.ceil(p["Lx"] / p["size"]), max(math.ceil(p["Ly"] / p["size"]), 2))
+    * max(math.ceil(p["Lz"] / p["size"]), 1),
 }
 
 
 def mesh_cells(builder: str, params: dict) -> float:
-    """The number of triangles the builder ``builder`` makes from ``params`` (an estimate for the
+    """The number of cells (triangles, tetrahedra for the box) the builder ``builder`` makes from ``params`` (an estimate for the
     unstructured quarter_disc); inf when the sizes are so small that the count overflows."""
     try:
         return float(CELLS[builder](params))

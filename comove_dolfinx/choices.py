@@ -6,7 +6,7 @@ checked here before anything heavy is imported. The modules that implement the c
 they implement exactly these (tests/test_input.py).
 """
 
-MODELS = ("plane_strain", "plane_stress", "axisymmetric")
+MODELS = ("plane_strain", "plane_stress", "axisymmetric", "solid")
 UPDATES = ("sr_log", "sr", "hughes_winget", "polar", "svk", "neo_hooke", "small_strain")
 PLASTIC_UPDATES = ("sr_log", "sr", "hughes_winget", "small_strain")   # those that carry a rotated old stress
 CONTACT_METHODS = ("penalty", "nitsche")

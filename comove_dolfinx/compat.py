@@ -29,7 +29,8 @@ _OLD = VERSION < (0, 9)
 
 ScalarType = PETSc.ScalarType
 
-_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral}
+_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral,
+          "tetrahedron": basix.CellType.tetrahedron}
 
 
 def check_version() -> None:
@@ -44,7 +45,7 @@ def check_version() -> None:
 # Spaces and elements
 # ------------------------------------------------------------------------------------------------
 def cell_name(mesh) -> str:
-    """'triangle' or 'quadrilateral' (a method of ufl.Cell up to ufl 2025, a property from 2026)."""
+    """'triangle', 'quadrilateral' or 'tetrahedron' (a method of ufl.Cell up to ufl 2025, a property from 2026)."""
     name = mesh.ufl_cell().cellname
     return name() if callable(name) else name
 

@@ -20,6 +20,20 @@ from .checks import choice, text
 __all__ = ["BodyForce", "Displacement", "Fixed", "Item", "ItemError", "PointLoad", "Pressure", "Traction"]
 
 
+def _vector(name: str, value) -> np.ndarray:
+    """``value`` as 2 (2D) or 3 (3D) finite numbers; ItemError naming ``name`` otherwise."""
+    n = 3 if isinstance(value, (list, tuple, np.ndarray)) and np.size(value) == 3 else 2
+    return _finite(name, value, (n,))
+
+
+def _dimension(item, what: str, value, ctx) -> None:
+    """ItemError unless the vector ``value`` has one entry per displacement component of the
+    model (2, or 3 in 3D)."""
+    if value is not None and np.size(value) != ctx.kin.dim:
+        raise ItemError(f"{item}: {what} = {tuple(np.ravel(value))} has {np.size(value)} components, the "
+                        f"body's displacement {ctx.kin.dim}: give {ctx.kin.dim} numbers")
+
+
 def _boundary(boundary) -> None:
     """ItemError unless ``boundary`` is a boundary's name."""
     why = text("boundary", boundary, "the name of a tagged boundary, e.g. 'left'")
@@ -29,26 +43,32 @@ def _boundary(boundary) -> None:
 
 class Displacement(Item):
     """Prescribed displacement on a tagged boundary: u = factor * value (a vector, or a number for
-    one component), or u = field(x, factor) (x the (3, N) reference points; returns (2, N), or (N,)
-    for one component). ``component``: 0 (x or r), 1 (y or z), or None (both)."""
+    one component), or u = field(x, factor) (x the (3, N) reference points; returns (2, N), in 3D
+    (3, N), or (N,) for one component). ``component``: 0 (x or r), 1 (y or z), 2 (z, 3D only), or
+    None (all)."""
 
     kind = "support"
 
     def __init__(self, boundary: str, value=None, component: int | None = None, field=None):
         super().__init__(boundary)
         _boundary(boundary)
-        if choice("component", component, (None, 0, 1)):
-            raise ItemError(f"component = {component!r}: use 0 (x), 1 (y) or None (both)")
+        if choice("component", component, (None, 0, 1, 2)):
+            raise ItemError(f"component = {component!r}: use 0 (x), 1 (y), 2 (z, 3D) or None (all)")
         if field is not None and not callable(field):
             raise ItemError(f"boundary {boundary!r}: field = {field!r}: give a function field(x, factor)")
         if value is not None and field is not None:
             raise ItemError(f"boundary {boundary!r}: give a value or a field, not both")
         self.boundary, self.component, self.field = boundary, component, field
-        shape = () if component is not None else (2,)
-        self.value = None if value is None else _finite(f"displacement of {boundary!r}", value, shape)
+        what = f"displacement of {boundary!r}"
+        self.value = None if value is None else (
+            _finite(what, value) if component is not None else _vector(what, value))
 
     def attach(self, ctx):
         V, fdim = ctx.V, ctx.mesh.topology.dim - 1
+        if self.component is not None and self.component >= ctx.kin.dim:
+            raise ItemError(f"{self}: component = {self.component} in a 2D body: use 0 (x), 1 (y) or None")
+        if self.component is None:
+            _dimension(self, "value", self.value, ctx)
         facets = ctx.facets(self.boundary)
         if self.field is not None:
             if self.component is None:
@@ -62,7 +82,7 @@ class Displacement(Item):
                 self.bcs = [fem.dirichletbc(self._g, dofs, V.sub(self.component))]
                 dofs = dofs[0]
         elif self.component is None:
-            self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+            self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0,) * ctx.kin.dim))
             dofs = fem.locate_dofs_topological(V, fdim, facets)
             self.bcs = [fem.dirichletbc(self._c, dofs, V)]
         else:
@@ -138,7 +158,7 @@ class Pressure(Item):
     """Follower pressure ``p`` (times the factor) on a tagged boundary: it pushes into the body, normal
     to the current face (Nanson: t da = -p J F^-T N dA), the stress update's F (under linear
     kinematics, ``small_strain``, F = I: a dead pressure on the reference normal). Per unit reference
-    thickness in plane stress."""
+    thickness in plane stress; on faces in 3D."""
 
     def __init__(self, boundary: str, p: float):
         super().__init__(boundary)
@@ -150,6 +170,9 @@ class Pressure(Item):
         N = ufl.FacetNormal(ctx.mesh)
         F = ctx.update.F(ctx.u)
         cof = ufl.det(F) * ufl.inv(F).T
+        if ctx.kin.solid:       # cof F (quadratic in Grad u) N . v: degree 2 k on a flat face
+            ds = ctx.ds(self.boundary, {"quadrature_degree": 2 * ctx.degree})
+            return self._c * ufl.dot(cof * N, ctx.v) * ds
         v3 = ufl.as_vector([ctx.v[0], ctx.v[1], 0.0])
         return -(-self._c * ufl.dot(cof * ufl.as_vector([N[0], N[1], 0.0]), v3) * ctx.weight
                  * ctx.ds(self.boundary))
@@ -159,15 +182,17 @@ class Pressure(Item):
 
 
 class Traction(Item):
-    """Dead traction ``vector`` (times the factor) per unit reference area of a tagged boundary."""
+    """Dead traction ``vector`` (times the factor; 2 components, 3 in 3D) per unit reference area of a
+    tagged boundary."""
 
     def __init__(self, boundary: str, vector):
         super().__init__(boundary)
         _boundary(boundary)
-        self.boundary, self.traction = boundary, _finite(f"traction on {boundary!r}", vector, (2,))
+        self.boundary, self.traction = boundary, _vector(f"traction on {boundary!r}", vector)
 
     def attach(self, ctx):
-        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+        _dimension(self, "vector", self.traction, ctx)
+        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0,) * ctx.kin.dim))
         return -(ufl.dot(self._c, ctx.v) * ctx.weight * ctx.ds(self.boundary))
 
     def _apply(self, factor):
@@ -175,16 +200,18 @@ class Traction(Item):
 
 
 class BodyForce(Item):
-    """Dead force ``vector`` (times the factor) per unit reference volume, e.g. gravity (0, -rho g)."""
+    """Dead force ``vector`` (times the factor) per unit reference volume, e.g. gravity (0, -rho g), in
+    3D (0, 0, -rho g)."""
 
     def __init__(self, vector, name: str = "body_force"):
         super().__init__(name)
         if text("name", name):
             raise ItemError(text("name", name))
-        self.force = _finite("body force", vector, (2,))
+        self.force = _vector("body force", vector)
 
     def attach(self, ctx):
-        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+        _dimension(self, "vector", self.force, ctx)
+        self._c = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0,) * ctx.kin.dim))
         dx = ufl.dx(domain=ctx.mesh, metadata={"quadrature_degree": 2 * ctx.degree + 1})
         return -(ufl.dot(self._c, ctx.v) * ctx.weight * dx)
 
@@ -195,22 +222,25 @@ class BodyForce(Item):
 class PointLoad(Item):
     """Dead force ``vector`` (times the factor) at the mesh node at ``point``: per unit thickness in
     plane models (a line load through the thickness), a ring load's total in axisymmetry (pass the
-    total; it acts at the node's radius)."""
+    total; it acts at the node's radius); in 3D a force at the node (point and vector of 3)."""
 
     def __init__(self, point, vector, name: str = "point_load"):
         super().__init__(name)
         if text("name", name):
             raise ItemError(text("name", name))
-        self.point = _finite("point of the load", point, (2,))
-        self.force = _finite("point load", vector, (2,))
+        self.point = _vector("point of the load", point)
+        self.force = _vector("point load", vector)
 
     def attach(self, ctx):
         from mpi4py import MPI
+        _dimension(self, "point", self.point, ctx)
+        _dimension(self, "vector", self.force, ctx)
+        dim = ctx.kin.dim
         X = ctx.V.tabulate_dof_coordinates()
         n = ctx.V.dofmap.index_map.size_local
-        d = np.linalg.norm(X[:n, :2] - self.point, axis=1) if n else np.array([np.inf])
+        d = np.linalg.norm(X[:n, :dim] - self.point, axis=1) if n else np.array([np.inf])
         best, owner = ctx.mesh.comm.allreduce((float(d.min()), ctx.mesh.comm.rank), op=MPI.MINLOC)
-        size = ctx.mesh.comm.allreduce(float(np.ptp(X[:n, :2], axis=0).max()) if n else 0.0, op=MPI.MAX)
+        size = ctx.mesh.comm.allreduce(float(np.ptp(X[:n, :dim], axis=0).max()) if n else 0.0, op=MPI.MAX)
         if best > 1e-8 * max(size, 1.0):
             raise ItemError(f"no mesh node at {tuple(self.point)} for the point load (nearest at "
                             f"{best:.3g}): put a node there")
@@ -220,4 +250,5 @@ class PointLoad(Item):
         return None
 
     def nodal(self):
-        return self._dofs, np.broadcast_to(self.factor * self.force, (len(self._dofs) // 2, 2)).ravel()
+        k = len(self.force)
+        return self._dofs, np.broadcast_to(self.factor * self.force, (len(self._dofs) // k, k)).ravel()

@@ -76,27 +76,36 @@ class Probe:
 
 
 class NodeDisplacement(Probe):
-    """Displacement of the mesh node at ``point`` (reference coordinates): columns ``<name>_ux``,
-    ``<name>_uy``, or one column (``column``, default ``<name>_u<x|y>``) for one ``component``."""
+    """Displacement of the mesh node at ``point`` (reference coordinates; three in 3D): columns
+    ``<name>_ux``, ``<name>_uy`` (and ``<name>_uz`` for a 3D point), or one column (``column``,
+    default ``<name>_u<x|y|z>``) for one ``component`` (2: z, 3D only)."""
 
     def __init__(self, name: str, point, component: int | None = None, column: str | None = None,
                  tol: float = 1e-8):
-        _refuse(text("name", name), choice("component", component, (None, 0, 1), " (0: x, 1: y, None: both)"),
+        _refuse(text("name", name), choice("component", component, (None, 0, 1, 2),
+                                           " (0: x, 1: y, 2: z in 3D, None: all)"),
                 None if column is None else text("column", column), number("tol", tol, gt=0))
-        ok = isinstance(point, (list, tuple, np.ndarray)) and len(point) == 2 and \
+        ok = isinstance(point, (list, tuple, np.ndarray)) and len(point) in (2, 3) and \
             all(number("", v) is None for v in point)
-        _refuse(None if ok else f"probe {name!r}: point = {point!r}: give two finite numbers (x, y)")
+        _refuse(None if ok else f"probe {name!r}: point = {point!r}: give two finite numbers (x, y), or "
+                "three (x, y, z) in 3D")
+        _refuse(None if component is None or component < len(point) else
+                f"probe {name!r}: component = 2 needs a 3D point (x, y, z), got {point!r}")
         self.name, self.point, self.component, self.tol = name, np.asarray(point, float), component, tol
+        self.dim = len(point)
         if component is None:
-            self.columns = (f"{name}_ux", f"{name}_uy")
+            self.columns = tuple(f"{name}_u{c}" for c in "xyz"[:self.dim])
         else:
-            self.columns = (column or f"{name}_u{'xy'[component]}",)
+            self.columns = (column or f"{name}_u{'xyz'[component]}",)
 
     def attach(self, model) -> None:
         V = model.V
+        if V.dofmap.index_map_bs != self.dim:
+            raise ProbeError(f"probe {self.name!r}: point = {tuple(self.point)} has {self.dim} coordinates, "
+                             f"the body {V.dofmap.index_map_bs}: give {V.dofmap.index_map_bs}")
         X = V.tabulate_dof_coordinates()
         n_owned = V.dofmap.index_map.size_local
-        d = np.linalg.norm(X[:n_owned, :2] - self.point, axis=1)
+        d = np.linalg.norm(X[:n_owned, :self.dim] - self.point, axis=1)
         comm = model.comm
         best, owner = comm.allreduce((float(d.min()) if d.size else np.inf, comm.rank), op=MPI.MINLOC)
         if best > self.tol:
@@ -107,9 +116,10 @@ class NodeDisplacement(Probe):
 
     def value(self, f) -> np.ndarray:
         """The probed node's value of a vector function of the displacement space."""
-        val = np.zeros(2)
+        k = self.dim
+        val = np.zeros(k)
         if self._comm.rank == self._owner:
-            val[:] = f.x.array[2 * self._dof: 2 * self._dof + 2]
+            val[:] = f.x.array[k * self._dof: k * self._dof + k]
         return self._comm.allreduce(val, op=MPI.SUM)
 
     def __call__(self, model) -> dict:
@@ -181,17 +191,23 @@ class ContactPeak(Probe):
 
 class Reaction(Probe):
     """Total force that the supports of a tagged boundary (its ``Fixed`` and ``Displacement`` items)
-    exert on it: ``<name>_fx``, ``<name>_fy``, from the residual at the boundary's nodes in the
-    components those supports hold (a corner node's other component, held by a neighbouring
-    boundary's support, is that support's; Model.reaction_forces). Zero once a step released them."""
+    exert on it: ``<name>_fx``, ``<name>_fy`` (and ``<name>_fz`` with ``dim`` 3, for a 3D body),
+    from the residual at the boundary's nodes in the components those supports hold (a corner
+    node's other component, held by a neighbouring boundary's support, is that support's;
+    Model.reaction_forces). Zero once a step released them."""
 
-    def __init__(self, boundary: str, name: str | None = None):
-        _refuse(text("boundary", boundary), None if name is None else text("name", name))
-        self.boundary = boundary
+    def __init__(self, boundary: str, name: str | None = None, dim: int = 2):
+        _refuse(text("boundary", boundary), None if name is None else text("name", name),
+                choice("dim", dim, (2, 3), " (3 for a 3D body)"))
+        self.boundary, self.dim = boundary, dim
         name = name or boundary
-        self.columns = (f"{name}_fx", f"{name}_fy")
+        self.columns = tuple(f"{name}_f{c}" for c in "xyz"[:dim])
 
     def attach(self, model) -> None:
+        if model.V.dofmap.index_map_bs != self.dim:
+            raise ProbeError(f"Reaction({self.boundary!r}): dim = {self.dim}, the body has "
+                             f"{model.V.dofmap.index_map_bs} displacement components: give "
+                             f"dim={model.V.dofmap.index_map_bs}")
         if not model.supports_of(self.boundary):
             raise ProbeError(f"Reaction({self.boundary!r}): no support (Fixed, Displacement) acts on "
                              f"boundary {self.boundary!r}; give a supported boundary (ContactForce "

@@ -95,9 +95,18 @@ def _positive(key, value):
     return number(key, value, gt=0)
 
 
+def _kind(key, value):
+    """A body's kind: one of MODELS, and not (yet) the 3D model, which problem files do not describe."""
+    why = choice(key, value, MODELS)
+    if why is None and value == "solid":
+        return (f"{key} = 'solid': problem files describe 2D bodies; build a 3D body from Python "
+                "(cm.Body(cm.box(...), 'solid', ...))")
+    return why
+
+
 #: the values a key may take, wherever it stands (its type is checked first): the message or None
 RANGES = {
-    "kind": lambda k, v: choice(k, v, MODELS), "update": lambda k, v: choice(k, v, UPDATES),
+    "kind": _kind, "update": lambda k, v: choice(k, v, UPDATES),
     "degree": lambda k, v: choice(k, v, (1, 2)), "order": lambda k, v: choice(k, v, (1, 2)),
     "law": lambda k, v: choice(k, v, LAWS), "component": lambda k, v: choice(k, v, (0, 1), " (0: x, 1: y)"),
     "thickness": _positive, "gamma0": _positive, "gamma0_t": _positive, "radius": _positive,

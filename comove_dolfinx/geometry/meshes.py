@@ -35,11 +35,12 @@ class MeshData:
     Attributes
     ----------
     mesh : dolfinx.mesh.Mesh
-        The mesh (gdim = 2), already passed through `fix_coordinate_element`.
+        The mesh (gdim = 2; gdim = 3 for a 3D mesh of tetrahedra), already passed through
+        `fix_coordinate_element`.
     cell_tags, facet_tags : dolfinx.mesh.MeshTags
-        Tags of the physical surfaces and curves of the .msh file.
+        Tags of the physical surfaces and curves of the .msh file (in 3D: volumes and surfaces).
     tags : dict[str, int]
-        Facet (curve) physical-group name -> tag value.
+        Facet (curve; surface in 3D) physical-group name -> tag value.
     path : pathlib.Path
         The .msh file the mesh was read from.
     cell_names : dict[str, int]
@@ -84,14 +85,14 @@ def add_group(dim: int, entities: list[int], tag: int, name: str) -> None:
 
 
 def build_cached(builder: str, params: dict, construct: Callable[[], None], comm: MPI.Comm,
-                 cache_dir: str | os.PathLike) -> MeshData:
+                 cache_dir: str | os.PathLike, dim: int = 2) -> MeshData:
     """Write the mesh on rank 0 unless its cache file exists, then read it on every rank.
 
     `construct` creates the geometry, the physical groups and the mesh-size settings of the current
     gmsh model (and synchronizes); this function meshes it, raises its order (``params["order"]``)
     and writes the file under a temporary name, renamed into place. A gmsh failure on rank 0 is
     raised on every rank (MeshError). The builders of this package and the verification cases'
-    meshes use it.
+    meshes use it. ``dim``: the dimension meshed, 2 (triangles) or 3 (tetrahedra).
     """
     path = _cache_path(builder, params, cache_dir)
     error = None
@@ -102,7 +103,7 @@ def build_cached(builder: str, params: dict, construct: Callable[[], None], comm
             path.parent.mkdir(parents=True, exist_ok=True)
             gmsh.model.add(builder)
             construct()
-            gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.generate(dim)
             gmsh.model.mesh.setOrder(params["order"])  # order 2: new nodes on the true curves
             gmsh.write(str(tmp))
             os.replace(tmp, path)
@@ -118,41 +119,44 @@ def build_cached(builder: str, params: dict, construct: Callable[[], None], comm
     return load_msh(path, comm)
 
 
-def _groups_of_current_model(path: pathlib.Path, required: Iterable[str]) -> tuple[dict, dict]:
-    """Facet and cell physical groups (name -> tag) of the merged file; MeshError if unusable."""
+def _groups_of_current_model(path: pathlib.Path, required: Iterable[str]) -> tuple[dict, dict, int]:
+    """Facet and cell physical groups (name -> tag) of the merged file and its dimension (2, or 3
+    with physical volumes); MeshError if unusable."""
     groups = gmsh.model.getPhysicalGroups()
     if not groups:
         raise MeshError(f"{path} has no physical groups; tag the body surface and the boundary curves "
                         "(Physical Surface / Physical Curve) before saving the mesh")
     top = max(dim for dim, _ in groups)
-    if top != 2:
+    if top not in (2, 3):
         raise MeshError(f"{path}: the highest physical group dimension is {top}; comove_dolfinx reads "
-                        "2D meshes with a physical surface for the body (and curves for boundaries)")
-    names: dict[int, dict[str, int]] = {1: {}, 2: {}}
+                        "2D meshes with a physical surface for the body (and curves for boundaries), "
+                        "or 3D ones with a physical volume (and surfaces)")
+    names: dict[int, dict[str, int]] = {top - 1: {}, top: {}}
     for dim, tag in groups:
         if dim in names:
             names[dim][gmsh.model.getPhysicalName(dim, tag) or str(tag)] = tag
     # model_to_mesh asserts one element type per entity on rank 0 only: check here to avoid a deadlock
-    for dim in (1, 2):
+    for dim in (top - 1, top):
         entities = [e for d, tag in groups if d == dim for e in gmsh.model.getEntitiesForPhysicalGroup(d, tag)]
         types = {t for e in entities for t in gmsh.model.mesh.getElementTypes(dim, e)}
         if len(types) > 1:
             raise MeshError(f"{path} mixes element types {sorted(types)} in its {dim}D physical groups; "
                             "dolfinx 0.5 needs one cell type (all triangles or all quadrilaterals)")
     z = gmsh.model.mesh.getNodes()[1][2::3]
-    if z.size and np.abs(z).max() > 0:
+    if top == 2 and z.size and np.abs(z).max() > 0:
         raise MeshError(f"{path} is not in the plane z = 0 (max |z| = {np.abs(z).max():g}); "
                         "comove_dolfinx reads 2D (x, y) meshes")
-    missing = [name for name in required if name not in names[1]]
+    missing = [name for name in required if name not in names[top - 1]]
     if missing:
-        raise MeshError(f"{path}: facet group(s) {missing} not found; present: {sorted(names[1])}. "
-                        "Add them as named physical curves or fix the names asked for")
-    return names[1], names[2]
+        raise MeshError(f"{path}: facet group(s) {missing} not found; present: {sorted(names[top - 1])}. "
+                        "Add them as named physical curves (surfaces in 3D) or fix the names asked for")
+    return names[top - 1], names[top], top
 
 
 def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
              required: Iterable[str] = ()) -> MeshData:
-    """Read a 2D gmsh .msh file on rank 0 and distribute it over `comm`.
+    """Read a 2D (or 3D, with a physical volume) gmsh .msh file on rank 0 and distribute it over
+    `comm`.
 
     Parameters
     ----------
@@ -171,7 +175,7 @@ def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
     """
     path = pathlib.Path(path)
     required = tuple(required)
-    error, facet_names, cell_names = None, {}, {}
+    error, facet_names, cell_names, dim = None, {}, {}, 2
     if comm.rank == 0:
         if not path.is_file():
             error = f"mesh file {path} not found (absolute: {path.resolve()}); check the path"
@@ -180,20 +184,20 @@ def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
             try:
                 gmsh.model.add("comove_load")
                 gmsh.merge(str(path))
-                facet_names, cell_names = _groups_of_current_model(path, required)
+                facet_names, cell_names, dim = _groups_of_current_model(path, required)
             except MeshError as err:
                 error = str(err)
             except Exception as err:
                 error = f"gmsh cannot read {path}: {err}"
             if error is not None:
                 _stop_gmsh()
-    error, facet_names, cell_names = comm.bcast((error, facet_names, cell_names), root=0)
+    error, facet_names, cell_names, dim = comm.bcast((error, facet_names, cell_names, dim), root=0)
     if error is not None:
         raise MeshError(error)
     # dolfinx 0.5.2's gmshio.read_from_msh is broken (NameError: 'msh' on the reading rank,
     # 'partitioner' elsewhere), so do what it should: merge on rank 0, then model_to_mesh everywhere.
     try:
-        mesh, cell_tags, facet_tags = compat.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+        mesh, cell_tags, facet_tags = compat.model_to_mesh(gmsh.model, comm, 0, gdim=dim)
     finally:
         if comm.rank == 0:
             _stop_gmsh()
@@ -205,9 +209,10 @@ def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,
 
 def from_dolfinx(mesh: dolfinx.mesh.Mesh, facet_tags: dolfinx.mesh.MeshTags, names: dict[str, int],
                  cell_tags: dolfinx.mesh.MeshTags | None = None) -> MeshData:
-    """A mesh made with dolfinx, with its facet tags and a name for each tag value used."""
-    if mesh.geometry.dim != 2 or mesh.topology.dim != 2:
-        raise MeshError("the mesh must be 2D (gdim = tdim = 2)")
+    """A mesh made with dolfinx, with its facet tags and a name for each tag value used (2D, or 3D
+    for the model "solid")."""
+    if mesh.geometry.dim != mesh.topology.dim or mesh.topology.dim not in (2, 3):
+        raise MeshError("the mesh must be 2D (gdim = tdim = 2) or 3D (gdim = tdim = 3)")
     present = set(np.unique(facet_tags.values).tolist())
     present = set().union(*mesh.comm.allgather(present))
     missing = {k: v for k, v in names.items() if v not in present}

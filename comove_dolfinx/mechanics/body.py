@@ -1,4 +1,4 @@
-"""A body: its mesh, the 2D model, the material, the stress update and the discretisation."""
+"""A body: its mesh, the model (2D or 3D), the material, the stress update and the discretisation."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -17,15 +17,17 @@ class BodyError(ValueError):
 
 @dataclass
 class Body:
-    """A 2D solid.
+    """A solid: plane, axisymmetric or three-dimensional.
 
     Parameters
     ----------
     mesh : geometry.MeshData
-        Mesh with named facet groups (``comove_dolfinx.geometry`` builds, reads or wraps one).
+        Mesh with named facet groups (``comove_dolfinx.geometry`` builds, reads or wraps one):
+        triangles for the 2D models, tetrahedra for "solid".
     kind : str
-        "plane_strain", "plane_stress" (forces per unit thickness) or "axisymmetric" (x = r, y = z;
-        forces are totals over the circumference).
+        "plane_strain", "plane_stress" (forces per unit thickness), "axisymmetric" (x = r, y = z;
+        forces are totals over the circumference) or "solid" (3D: three displacement components,
+        the full 3x3 kinematics; docs/theory.md section 1.4).
     material : Elastic, J2 or Chen
         Elastic constants, or an elastic-plastic law with its hardening.
     update : str
@@ -36,10 +38,10 @@ class Body:
     degree : int
         Lagrange degree of the displacement, 1 or 2 (P1 locks in bending).
     thickness : float
-        Out-of-plane thickness of plane models.
+        Out-of-plane thickness of plane models (ignored in 3D).
     quadrature_degree : int, optional
         Of the volume integrals, 1 to 30; by default 2 (3 points, exact P2 small-strain stiffness),
-        3 in axisymmetry (the weight r), 1 for P1.
+        3 in axisymmetry (the weight r), 1 for P1 (in 3D: 2 for P2, the 4-point rule, 1 for P1).
 
     Every value is checked here: one that cannot be used raises :class:`BodyError` (or
     ``MaterialError``) naming it and the fix.
@@ -59,6 +61,11 @@ class Body:
                             "mesh through cm.from_dolfinx(mesh, facet_tags, names))")
         if not isinstance(self.kind, str) or self.kind not in MODELS:
             raise BodyError(f"kind = {self.kind!r} is unknown: choose one of {', '.join(MODELS)}")
+        dim = self.mesh.mesh.topology.dim
+        if (self.kind == "solid") != (dim == 3):
+            want = "a 3D mesh of tetrahedra (cm.box)" if self.kind == "solid" else \
+                "a 2D mesh (or kind = 'solid' for a 3D one)"
+            raise BodyError(f"kind = {self.kind!r} on a mesh of dimension {dim}: give {want}")
         if not isinstance(self.material, (Elastic, Plastic)):
             raise BodyError(f"material = {self.material!r}: give Elastic(E, nu), J2(E, nu, hardening) "
                             "or Chen(E, nu, hardening)")

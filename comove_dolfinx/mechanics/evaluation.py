@@ -14,8 +14,15 @@ from mpi4py import MPI
 
 from .. import compat
 from ..parallel import agree
-from .kinematics import to_vec
 from .state import InvertedElement, ReturnMapFailure
+
+
+def _tetrahedron_nodes(degree: int) -> np.ndarray:
+    """The reference tetrahedron's vertices and, for degree 2, its edge midpoints."""
+    v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    if degree != 2:
+        return v
+    return np.vstack([v, [0.5 * (v[i] + v[j]) for i in range(4) for j in range(i + 1, 4)]])
 
 
 class StressEvaluation:
@@ -40,18 +47,18 @@ class StressEvaluation:
     def _columns(m, up, table, compiled_return: bool):
         """The evaluated columns (state.QuadratureState.evaluate reads them in this order)."""
         st = m.state
-        parts = [to_vec(up.sigma)]
+        parts = [m.kin.vec(up.sigma)]
         compiled = None if m.plastic is None or not compiled_return else m.plastic.compiled(
-            to_vec(up.sigma), st.p_n, m.kin.model, m.constants, table)
+            m.kin.vec(up.sigma), st.p_n, m.kin.model, m.constants, table)
         if compiled is not None:
             sig, p = compiled
             parts = [sig, [p]]
             st.compiled = True
         elif m.plastic is not None:
-            parts.append(to_vec(up.sigma_rot))
+            parts.append(m.kin.vec(up.sigma_rot))
         if up.state_new is not None:
             parts.append(up.state_new)
-            st.state_new = np.zeros((m.rule.size, 4))
+            st.state_new = np.zeros((m.rule.size, m.kin.size))
         # det F (a linear body's is 1: it has no configuration to fold)
         parts.append(ufl.as_vector([ufl.det(m.update.F(m.u))]))
         return ufl.as_vector([c for p in parts for c in p])
@@ -62,6 +69,8 @@ class StressEvaluation:
         kinematics."""
         if not m.update.geometric:
             return None
+        if m.kin.solid:
+            return compat.expression(ufl.det(ufl.Identity(3) + ufl.grad(m.u)), _tetrahedron_nodes(m.degree))
         pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
                        ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if m.degree == 2 else []))
         return compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(m.u)), pts)

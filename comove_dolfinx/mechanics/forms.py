@@ -28,7 +28,7 @@ from ufl.algorithms import expand_derivatives
 
 from .. import compat
 from . import return_maps_ufl as rm_ufl
-from .kinematics import PLANE_STRESS, cofactor, to_tensor, to_vec
+from .kinematics import PLANE_STRESS, cofactor, cofactor3, to_tensor
 from .state import FacetBase
 
 
@@ -72,7 +72,7 @@ class Forms:
             return m.update.F(m.u), None, to_tensor(st.sigma)
         F22 = st.F22 if st.F22 is not None else self.update_terms.F22
         F = m.kin.F3(m.u, F22) if m.kin.model == PLANE_STRESS else m.kin.F3(m.u)
-        cof = cofactor(F)                      # J F^-T
+        cof = cofactor3(F) if m.kin.solid else cofactor(F)         # J F^-T
         return F, cof, to_tensor(st.sigma) * cof
 
     @staticmethod
@@ -94,10 +94,10 @@ class Forms:
         thickness stretch's part."""
         u, du, st, up = m.u, m.u_trial, m.state, self.update_terms
         dsig_tr, dsig_rot = m.update.directional(u, m.u_n, st.sigma_n, du, up)
-        dsig_tr = to_vec(dsig_tr)
+        dsig_tr = m.kin.vec(dsig_tr)
         dsig = to_tensor(dsig_tr)
         if m.plastic is not None:
-            dsig_rot = to_vec(dsig_rot)
+            dsig_rot = m.kin.vec(dsig_rot)
             Dx = m.plastic.tangent_times(st.sigma, st.p, st.p_n, dsig_tr, m.kin.model, m.constants,
                                          self.table)
             if Dx is None:                     # D stored by the evaluations
@@ -151,7 +151,7 @@ def surface_table(mesh, surface) -> rm_ufl.Table:
 
 
 def facet_traction(model, N, u=None, base: FacetBase | None = None):
-    """In-plane components of P N on facets, P = J sigma F^-T at displacement u (default the
+    """In-plane components (in 3D all three) of P N on facets, P = J sigma F^-T at displacement u (default the
     model's current one), for Nitsche terms: the constitutive update evaluated at the facet's points
     as a UFL function of u, from the converged state of the last increment (cell-wise DG fits) or
     from a captured ``base`` (the state a lag state u_lag was solved from) and, for
@@ -168,10 +168,10 @@ def facet_traction(model, N, u=None, base: FacetBase | None = None):
         sig, ezz = m.plastic.facet(up.sigma_rot, up.sigma, p_n, m.kin.model, m.constants)
         if ezz is not None:
             F22 = src.facet("F22_n") * ufl.exp(ezz)
-    N3 = ufl.as_vector([N[0], N[1], 0.0])
+    N3 = N if m.kin.solid else ufl.as_vector([N[0], N[1], 0.0])
     if not m.update.geometric:          # linear kinematics: sigma N on the reference facet
         PN = sig * N3
     else:
         F = m.kin.F3(u, F22) if m.kin.model == PLANE_STRESS else m.kin.F3(u)
-        PN = sig * cofactor(F) * N3
-    return ufl.as_vector([PN[0], PN[1]])
+        PN = sig * (cofactor3(F) if m.kin.solid else cofactor(F)) * N3
+    return PN if m.kin.solid else ufl.as_vector([PN[0], PN[1]])

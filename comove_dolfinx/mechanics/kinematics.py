@@ -7,10 +7,14 @@ Conventions
 -----------
 * 2D models live in a 3x3 embedding: indices 0, 1 are in-plane (x, y) or (r, z), index 2 is the
   out-of-plane direction (z in plane strain/stress, the hoop direction theta in axisymmetry).
+  The 3D model ``"solid"`` has the full 3x3 gradient ``F = I + Grad u`` of a displacement with three
+  components.
   ``F3 = [[F00, F01, 0], [F10, F11, 0], [0, 0, F22]]`` with F22 = 1 (plane strain), 1 + u_r/r
   (axisymmetry) or the thickness stretch given by the constitutive law (plane stress).
-* Symmetric tensors are stored as 4-vectors (xx, yy, zz, xy) of tensor components (shear once);
-  :func:`to_vec` and :func:`to_tensor` convert.
+* Symmetric tensors are stored as 4-vectors (xx, yy, zz, xy) of tensor components (shear once) in
+  the 2D models and as 6-vectors (xx, yy, zz, xy, yz, xz) in 3D (the 4-vector's entries first, then
+  the two shears that the 2D models do not have); :func:`to_vec` and :func:`to_tensor` convert
+  (:attr:`Kinematics.size` is the length).
 * The S-R decomposition (Chen) of a displacement gradient H: F = I + H = S + R with S symmetric
   (a strain, zero for a rigid motion) and R a rotation, in the singularity-free form
   c = sqrt(1 - W:W/2), R = I + W + W.W/(1 + c), S = sym H - W.W/(1 + c), W = skew H
@@ -23,19 +27,25 @@ import ufl
 PLANE_STRAIN = "plane_strain"
 PLANE_STRESS = "plane_stress"
 AXISYMMETRIC = "axisymmetric"
-MODELS = (PLANE_STRAIN, PLANE_STRESS, AXISYMMETRIC)
+SOLID = "solid"
+MODELS = (PLANE_STRAIN, PLANE_STRESS, AXISYMMETRIC, SOLID)
 
 
 # --------------------------------------------------------------------------------------------
 # Storage helpers
 # --------------------------------------------------------------------------------------------
-def to_vec(T: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """Symmetric 3x3 tensor -> 4-vector (xx, yy, zz, xy)."""
+def to_vec(T: ufl.core.expr.Expr, size: int = 4) -> ufl.core.expr.Expr:
+    """Symmetric 3x3 tensor -> 4-vector (xx, yy, zz, xy), or with ``size`` 6 the 6-vector
+    (xx, yy, zz, xy, yz, xz) of the 3D model."""
+    if size == 6:
+        return ufl.as_vector([T[0, 0], T[1, 1], T[2, 2], T[0, 1], T[1, 2], T[0, 2]])
     return ufl.as_vector([T[0, 0], T[1, 1], T[2, 2], T[0, 1]])
 
 
 def to_tensor(s: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """4-vector (xx, yy, zz, xy) -> symmetric 3x3 tensor."""
+    """4-vector (xx, yy, zz, xy) or 6-vector (xx, yy, zz, xy, yz, xz) -> symmetric 3x3 tensor."""
+    if s.ufl_shape == (6,):
+        return ufl.as_tensor([[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]])
     return ufl.as_tensor([[s[0], s[3], 0], [s[3], s[1], 0], [0, 0, s[2]]])
 
 
@@ -51,15 +61,16 @@ def von_mises(sigma: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
 
 
 # --------------------------------------------------------------------------------------------
-# Embeddings of the 2D models
+# Embeddings of the 2D models, and the 3D model
 # --------------------------------------------------------------------------------------------
 class Kinematics:
-    """Displacement gradients of a 2D model embedded in 3x3.
+    """Displacement gradients of a 2D model embedded in 3x3, or of the 3D model.
 
     Parameters
     ----------
     model:
-        ``"plane_strain"``, ``"plane_stress"`` or ``"axisymmetric"`` (x = r, y = z).
+        ``"plane_strain"``, ``"plane_stress"``, ``"axisymmetric"`` (x = r, y = z) or ``"solid"``
+        (3D: the full gradient, unit weight).
     x:
         ``ufl.SpatialCoordinate`` of the reference mesh.
     thickness:
@@ -78,12 +89,37 @@ class Kinematics:
     def axisymmetric(self) -> bool:
         return self.model == AXISYMMETRIC
 
+    @property
+    def solid(self) -> bool:
+        """The 3D model: a displacement of three components, no embedding."""
+        return self.model == SOLID
+
+    @property
+    def size(self) -> int:
+        """Length of a stored symmetric tensor: 4 (xx, yy, zz, xy) or 6 in 3D (..., yz, xz)."""
+        return 6 if self.solid else 4
+
+    @property
+    def dim(self) -> int:
+        """Number of displacement components: 2, or 3 in 3D."""
+        return 3 if self.solid else 2
+
+    def vec(self, T) -> ufl.core.expr.Expr:
+        """The stored vector of a symmetric 3x3 tensor T (:func:`to_vec` of this model's size)."""
+        return to_vec(T, self.size)
+
     def weight(self):
-        """Volume weight of the 2D integrals: 2 pi r (axisymmetry) or the thickness b."""
+        """Volume weight of the integrals: 2 pi r (axisymmetry), the thickness b (plane models) or
+        1 (3D)."""
+        if self.solid:
+            return 1.0
         return 2.0 * ufl.pi * self.x[0] if self.axisymmetric else self.thickness
 
     def grad3(self, w) -> ufl.core.expr.Expr:
-        """3x3 embedded reference gradient of a displacement-like field w (zz: w_r/r or 0)."""
+        """3x3 embedded reference gradient of a displacement-like field w (zz: w_r/r or 0); in 3D
+        the gradient itself."""
+        if self.solid:
+            return ufl.grad(w)
         zz = w[0] / self.x[0] if self.axisymmetric else 0
         return embed(ufl.grad(w), zz)
 
@@ -104,6 +140,16 @@ def cofactor(F) -> ufl.core.expr.Expr:
     inverse's explicit formula (divisions by det F, terms that cancel) in the generated code."""
     a, b, c, d, e = F[0, 0], F[0, 1], F[1, 0], F[1, 1], F[2, 2]
     return ufl.as_tensor([[e * d, -e * c, 0], [-e * b, e * a, 0], [0, 0, a * d - b * c]])
+
+
+def cofactor3(F) -> ufl.core.expr.Expr:
+    """J F^-T of a full 3x3 F, as :func:`cofactor` written without the inverse: the entry (i, j)
+    is the signed minor of F_ij, ``F[i+1, j+1] F[i+2, j+2] - F[i+1, j+2] F[i+2, j+1]`` (indices
+    mod 3), a quadratic polynomial in F."""
+    def minor(i, j):
+        i1, i2, j1, j2 = (i + 1) % 3, (i + 2) % 3, (j + 1) % 3, (j + 2) % 3
+        return F[i1, j1] * F[i2, j2] - F[i1, j2] * F[i2, j1]
+    return ufl.as_tensor([[minor(i, j) for j in range(3)] for i in range(3)])
 
 
 # --------------------------------------------------------------------------------------------
@@ -180,6 +226,35 @@ def sr_decomposition(H):
     return S, R, c
 
 
+def sr_decomposition_direction(H, G):
+    """The derivative of :func:`sr_decomposition` at H in the direction G = dH, in closed form:
+    (dS, dR). With W = skew H, dW = skew G, c = sqrt(1 - W:W/2) and k = 1 / (1 + c),
+
+        dc = -(W:dW) / (2 c),  dk = -k^2 dc,  d(W.W) = dW.W + W.dW,
+        dR = dW + k d(W.W) + dk W.W,  dS = sym G - k d(W.W) - dk W.W
+
+    (docs/theory.md section 1.4); defined wherever the split is (c > 0)."""
+    W, dW = ufl.skew(H), ufl.skew(G)
+    WW, dWW = W * W, dW * W + W * dW
+    c = ufl.sqrt(1.0 - 0.5 * ufl.inner(W, W))
+    k = 1.0 / (1.0 + c)
+    dk = 0.5 * ufl.inner(W, dW) / c * k * k
+    dR = dW + k * dWW + dk * WW
+    dS = ufl.sym(G) - k * dWW - dk * WW
+    return dS, dR
+
+
+def rotation_axis_angle(R):
+    """(unit axis, angle) of a rotation tensor R given as a NumPy 3x3 array: the angle in [0, pi]
+    from the trace, the axis from the skew part (for tests and post-processing; NumPy, not UFL)."""
+    import numpy as np
+    R = np.asarray(R, dtype=float)
+    w = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    angle = float(np.arctan2(np.linalg.norm(w), 0.5 * (np.trace(R) - 1.0)))
+    n = np.linalg.norm(w)
+    return (w / n if n > 0 else np.array([0.0, 0.0, 1.0])), angle
+
+
 def in_plane_angle(H):
     """(sin(theta), cos(theta)) of the S-R split's rotation of a gradient H of the 3x3 embedding:
     w = (H10 - H01) / 2 and c = sqrt(1 - w^2) (NaN out of range, docs/theory.md section 2.3)."""
@@ -211,6 +286,21 @@ def increment_gradient(F, F_n):
     """Gradient of the increment relative to configuration n: dH = Grad(du) F_n^-1 = F F_n^-1 - I."""
     n = F.ufl_shape[0]
     return F * ufl.inv(F_n) - ufl.Identity(n)
+
+
+def polar_rotation_3d(F, steps: int = 6):
+    """Rotation of the polar decomposition F = R U of a 3x3 F with det F > 0, by Newton's iteration
+    for the orthogonal factor with determinant scaling, unrolled ``steps`` times from R_0 = F:
+    R_(k+1) = (g R_k + cof(R_k) / (g det R_k)) / 2 with g = det(R_k)^(-1/3) and cof(R) = det(R) R^-T
+    (:func:`cofactor3`, no inverse). The iteration converges quadratically for any F with det F > 0;
+    6 steps reach round-off for principal stretch ratios up to about 10 (tests/test_solid3d.py
+    checks R^T R = I and the symmetry of R^T F)."""
+    R = F
+    for _ in range(steps):
+        J = ufl.det(R)
+        g = J ** (-1.0 / 3.0)
+        R = 0.5 * (g * R + cofactor3(R) / (g * J))
+    return R
 
 
 def polar_rotation_2d(F):

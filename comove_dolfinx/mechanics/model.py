@@ -73,7 +73,7 @@ class Model:
         self.rule = QuadratureRule(msh, body.rule_degree())
         self.constants = ElasticConstants(msh, self.elastic)
         self.update = make_update(body.update, self.kin, self.constants)
-        self.V = compat.function_space(msh, "Lagrange", body.degree, (2,))
+        self.V = compat.function_space(msh, "Lagrange", body.degree, (self.kin.dim,))
         self.u = fem.Function(self.V, name="displacement")
         self.u_n = fem.Function(self.V, name="displacement_n")
         self.du = fem.Function(self.V, name="newton_correction")
@@ -89,8 +89,11 @@ class Model:
         """Build and compile the residual, the Jacobian (:attr:`forms`), the stress evaluation and
         the nodal det F check (:attr:`evaluation`), once. ``compiled_return``: the return map of a
         plastic body in the generated stress evaluation (True, where the law has a compiled form:
-        plane strain and axisymmetry) or in NumPy (False; plane stress always);
-        :class:`evaluation.StressEvaluation` says which is faster."""
+        plane strain, axisymmetry and 3D) or in NumPy (False; plane stress always; not in 3D, where
+        the return map is compiled only); :class:`evaluation.StressEvaluation` says which is faster."""
+        if not compiled_return and self.kin.solid and self.plastic is not None:
+            raise ValueError("compiled_return = False: the 3D model's return map is compiled only; "
+                             "use compiled_return=True")
         self.forms = Forms(self, jit_options)
         self.evaluation = StressEvaluation(self, self.forms.update_terms, self.forms.table, compiled_return)
         self.set_load(0.0)
@@ -133,7 +136,8 @@ class Model:
 
     # -- derived quantities -----------------------------------------------------------------------
     def cauchy_stress(self) -> np.ndarray:
-        """Cauchy stress at the points of the current iterate, shape (points, 4)."""
+        """Cauchy stress at the points of the current iterate, shape (points, 4), in 3D (points, 6)
+        (xx, yy, zz, xy, yz, xz)."""
         return self.rule.view(self.state.sigma)
 
     def num_dofs(self) -> int:

@@ -15,7 +15,8 @@ from dolfinx import fem
 
 from .. import compat
 
-_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral}
+_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral,
+          "tetrahedron": basix.CellType.tetrahedron}
 
 
 class QuadratureRule:
@@ -80,7 +81,8 @@ class CellInterpolator:
     """Cell-wise least-squares fit of quadrature-point values by a discontinuous Lagrange field.
 
     Used where quadrature data must be seen on facets (dolfinx cannot evaluate quadrature functions
-    there): with DG1 and the 3-point rule of degree 2 the fit interpolates the point values exactly.
+    there): with DG1 and the 3-point rule of degree 2 on triangles (the 4-point rule on tetrahedra) the
+    fit interpolates the point values exactly.
     """
 
     def __init__(self, rule: QuadratureRule, V_dg):

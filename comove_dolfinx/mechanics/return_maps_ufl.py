@@ -116,12 +116,28 @@ def _solve_dp(hardening: Hardening, q, pn, three_mu):
 
 
 def _deviator_points(sig):
-    """(deviator, equivalent stress) of a stress 4-vector (xx, yy, zz, xy; the shear counted twice
-    in s:s)."""
+    """(deviator, equivalent stress) of a stress 4-vector (xx, yy, zz, xy) or 6-vector (xx, yy, zz,
+    xy, yz, xz; 3D), the shears counted twice in s:s."""
     m = (sig[0] + sig[1] + sig[2]) / 3.0
+    if sig.ufl_shape == (6,):
+        s = ufl.as_vector([sig[0] - m, sig[1] - m, sig[2] - m, sig[3], sig[4], sig[5]])
+        ss = s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * (s[3] ** 2 + s[4] ** 2 + s[5] ** 2)
+        return s, ufl.sqrt(ufl.max_value(1.5 * ss, _TINY))
     s = ufl.as_vector([sig[0] - m, sig[1] - m, sig[2] - m, sig[3]])
     q = ufl.sqrt(ufl.max_value(1.5 * (s[0] ** 2 + s[1] ** 2 + s[2] ** 2 + 2.0 * s[3] ** 2), _TINY))
     return s, q
+
+
+def _deviator_dot(n, x, b):
+    """(dev x, b (n : x)) of stored vectors (4 or 6 entries; n deviatoric), as
+    :func:`j2_tangent_times` applies them."""
+    tr_x = (x[0] + x[1] + x[2]) / 3.0
+    if x.ufl_shape == (6,):
+        dev_x = ufl.as_vector([x[0] - tr_x, x[1] - tr_x, x[2] - tr_x, x[3], x[4], x[5]])
+        nx = n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + 2.0 * (n[3] * x[3] + n[4] * x[4] + n[5] * x[5])
+        return dev_x, b * nx
+    dev_x = ufl.as_vector([x[0] - tr_x, x[1] - tr_x, x[2] - tr_x, x[3]])
+    return dev_x, b * (n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + 2.0 * n[3] * x[3])
 
 
 def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
@@ -136,7 +152,8 @@ def j2_return(sig_tr, p_n, elastic, hardening: Hardening):
 def j2_return_points(sig_tr, p_n, elastic, hardening: Hardening):
     """The radial return of return_maps.j2_return_points in UFL, on 4-vectors (xx, yy, zz, xy): (stress,
     plastic strain). Its derivative D = d sigma / d sigma_tr is not evaluated here: the Jacobian applies
-    it from the stored state (:func:`j2_tangent_times`). Plane strain and axisymmetry."""
+    it from the stored state (:func:`j2_tangent_times`). Plane strain, axisymmetry and 3D (6-vectors
+    xx, yy, zz, xy, yz, xz)."""
     s, q = _deviator_points(sig_tr)
     three_mu = 3.0 * elastic.mu
     dp = _solve_dp(hardening, q, p_n, three_mu)
@@ -167,9 +184,7 @@ def j2_tangent_times(sig, p, p_n, x, elastic, hardening: Hardening):
     # do not depend on x first, since the Jacobian's kernel applies this to each direction of x
     y = ufl.conditional(ufl.gt(p, p_n), 1.0, 0.0)
     a, b = y * (theta - 1.0), y * c
-    tr_x = (x[0] + x[1] + x[2]) / 3.0
-    dev_x = ufl.as_vector([x[0] - tr_x, x[1] - tr_x, x[2] - tr_x, x[3]])
-    nWx = b * (n[0] * x[0] + n[1] * x[1] + n[2] * x[2] + 2.0 * n[3] * x[3])
+    dev_x, nWx = _deviator_dot(n, x, b)
     return x + a * dev_x - nWx * n
 
 

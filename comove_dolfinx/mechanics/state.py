@@ -1,6 +1,7 @@
 """The material state at the quadrature points, and its copies on the facets.
 
-Quadrature functions (4-vectors xx, yy, zz, xy; see kinematics.py): ``sigma_n`` the converged state of
+Quadrature functions (4-vectors xx, yy, zz, xy, in 3D 6-vectors xx, yy, zz, xy, yz, xz; see
+kinematics.py): ``sigma_n`` the converged state of
 increment n (the stress, or for the polar update the unrotated stress), ``sigma`` the stress at the
 current iterate; for elastic-plastic bodies ``p_n``/``p`` the equivalent plastic strain; in
 plane-stress plasticity ``D``, the derivative of the return map (the other models' Jacobian applies
@@ -39,9 +40,10 @@ class QuadratureState:
 
     def __init__(self, rule: QuadratureRule, plastic, kind: str, degree: int):
         self.rule, self.plastic, self.kind = rule, plastic, kind
+        self.size = n = 6 if kind == "solid" else 4          # the stored vectors' length
         r = rule
-        self.sigma_n = r.function((4,), "sigma_n")
-        self.sigma = r.function((4,), "sigma")
+        self.sigma_n = r.function((n,), "sigma_n")
+        self.sigma = r.function((n,), "sigma")
         self.p_n = r.function((), "p_n") if plastic else None
         self.p = r.function((), "p") if plastic else None
         # d sig / d sig_tr, elastic everywhere but at the points that yielded in the last evaluation:
@@ -74,16 +76,16 @@ class QuadratureState:
         worst = vals[:, -1].min() if len(vals) else 1.0
         if worst <= 0.0:
             raise InvertedElement(f"det F = {worst:.3g} <= 0 at a quadrature point")
-        view = self.rule.view
-        sig_tr, col = vals[:, 0:4], 4
+        view, n = self.rule.view, self.size
+        sig_tr, col = vals[:, 0:n], n
         if self.plastic is None:
             view(self.sigma)[:] = sig_tr
         elif self.compiled:                    # the return map was evaluated with the update
-            view(self.sigma)[:] = vals[:, 0:4]
-            self.p.x.array[:] = vals[:, 4]
-            col = 5
+            view(self.sigma)[:] = vals[:, 0:n]
+            self.p.x.array[:] = vals[:, n]
+            col = n + 1
         else:
-            sig_rot, col = vals[:, 4:8], 8
+            sig_rot, col = vals[:, n:2 * n], 2 * n
             out = self.plastic.update(sig_rot, sig_tr, self.p_n.x.array, self.kind,
                                       tangent=self.D is not None)
             view(self.sigma)[:] = out.sig
@@ -98,7 +100,7 @@ class QuadratureState:
                 view(self.G_tr)[:] = out.dezz_tr
                 view(self.G_rot)[:] = out.dezz_rot
         if self.state_new is not None:
-            self.state_new[:] = vals[:, col:col + 4]
+            self.state_new[:] = vals[:, col:col + n]
 
     def commit(self) -> None:
         """The current stress (or the update's own state) becomes the converged state."""
@@ -129,9 +131,9 @@ class QuadratureState:
     # -- copies on the facets --------------------------------------------------------------------
     def facet(self, name: str):
         """DG function holding a cell-wise fit of the converged state ``name`` (created on first use,
-        refreshed at each commit): "sigma_n" (4-vector), "p_n", "F22_n" (scalars)."""
+        refreshed at each commit): "sigma_n" (4-vector, 6 in 3D), "p_n", "F22_n" (scalars)."""
         if name not in self._facet:
-            shape = () if name in ("p_n", "F22_n") else (4,)
+            shape = () if name in ("p_n", "F22_n") else (self.size,)
             V = compat.function_space(self.rule.mesh, "DG", self._fit_degree, shape)
             f = fem.Function(V, name=name + "_dg")
             source = {"sigma_n": self.sigma_n, "p_n": self.p_n, "F22_n": self.F22_n}[name]

@@ -33,6 +33,40 @@ def rigid_motions(V) -> tuple[np.ndarray, np.ndarray, float]:
     return modes, c, size
 
 
+def rigid_motions_3d(V) -> tuple[np.ndarray, np.ndarray, float]:
+    """The three translations and the three rotations (about x, y, z through the centroid, scaled as
+    in :func:`rigid_motions`) of a 3D displacement space V at this rank's owned nodes, (nodes,
+    component, motion). Returns (modes, c, size). Collective."""
+    n = V.dofmap.index_map.size_local
+    X = V.tabulate_dof_coordinates()[:n, :3]
+    comm = V.mesh.comm
+    total = max(comm.allreduce(n, op=MPI.SUM), 1)
+    c = comm.allreduce(X.sum(axis=0), op=MPI.SUM) / total
+    d = X - c
+    size = float(np.sqrt(comm.allreduce(float((d ** 2).sum()), op=MPI.SUM) / total)) or 1.0
+    modes = np.zeros((n, 3, 6))
+    for k in range(3):
+        modes[:, k, k] = 1.0
+        modes[:, :, 3 + k] = np.cross(np.eye(3)[k], d) / size
+    return modes, c, size
+
+
+def describe_motions_3d(free: np.ndarray) -> list[str]:
+    """In words, the rigid motions spanned by the columns (tx, ty, tz, rx, ry, rz) of ``free``."""
+    out = []
+    for f in free.T:
+        f = f / np.abs(f).max()
+        t, r = f[:3], f[3:]
+        if np.abs(r).max() < 1e-8:
+            axis = int(np.argmax(np.abs(t)))
+            out.append("translation in " + ("xyz"[axis] if np.sum(np.abs(t) > 1e-8) == 1
+                                            else "direction ({:.3g}, {:.3g}, {:.3g})".format(*t)))
+        else:
+            out.append("rotation about the axis ({:.3g}, {:.3g}, {:.3g})".format(*(r / np.linalg.norm(r))) +
+                       ("" if np.abs(t).max() < 1e-8 else " with a translation"))
+    return out
+
+
 def describe_motions(free: np.ndarray, c: np.ndarray, size: float) -> list[str]:
     """In words, the rigid motions spanned by the columns (tx, ty, rot) of ``free``, in the units of
     :func:`rigid_motions` (centroid ``c``, rotation scaled by ``size``)."""
@@ -71,11 +105,18 @@ class Supports:
 
     def free_motions(self) -> list[str]:
         """The rigid-body motions that the Dirichlet conditions (as they stand) leave free, described
-        in words; empty when they hold the body. In the plane: the translations and the rotation
+        in words; empty when they hold the body. In 3D the three translations and three rotations;
+        in the plane: the translations and the rotation
         (the nullspace of the constrained dofs' rows of the three modes of :func:`rigid_motions`); in
         axisymmetry only the translation along the axis is rigid. Contact may hold a free motion
         once it closes; until it does, the tangent is singular along it. Collective."""
         m = self.model
+        if m.kin.solid:
+            modes, c, size = rigid_motions_3d(m.V)
+            rows = modes[self._held(self.bcs).reshape(-1, 3)]
+            G = m.comm.allreduce(rows.T @ rows, op=MPI.SUM)
+            w, vecs = np.linalg.eigh(G)
+            return describe_motions_3d(vecs[:, w <= 1e-10 * max(w.max(), 1.0)])
         modes, c, size = rigid_motions(m.V)
         rows = modes[self._held(self.bcs).reshape(-1, 2)]
         G = m.comm.allreduce(rows.T @ rows, op=MPI.SUM)
@@ -105,7 +146,7 @@ class Supports:
         return [it for it in self.model.items if it.kind == "support" and getattr(it, "boundary", None) == name]
 
     def reaction_forces(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """Reference positions (n, 2) and forces (n, 2) that the supports of a tagged boundary exert
+        """Reference positions (n, d) and forces (n, d) (d = 2, or 3 in 3D) that the supports of a tagged boundary exert
         on its nodes (this rank's owned nodes), from the residual at the current state
         (:meth:`support_forces`), in the components that those supports hold; zero in the others
         (at a corner node, the residual in a component that another boundary's support holds is
@@ -123,9 +164,9 @@ class Supports:
         bcs = [bc for it in self.supports_of(name) for bc in it.bcs]
         held = self._held(bcs).reshape(-1, bs) if bcs else np.zeros((R.size // bs, bs), bool)
         f = np.where(held[nodes], R.reshape(-1, bs)[nodes], 0.0)
-        return m.V.tabulate_dof_coordinates()[nodes, :2], f
+        return m.V.tabulate_dof_coordinates()[nodes, :bs], f
 
     def reaction(self, name: str) -> np.ndarray:
-        """Total force (x, y) that the supports of a tagged boundary exert on it (all ranks;
+        """Total force (x, y; x, y, z in 3D) that the supports of a tagged boundary exert on it (all ranks;
         :meth:`reaction_forces`)."""
         return self.model.comm.allreduce(self.reaction_forces(name)[1].sum(axis=0), op=MPI.SUM)

@@ -31,6 +31,12 @@ d_zz = -lambda/(lambda + 2 mu) tr(d_plane)  =>  F_zz = J_plane^(-lambda/(lambda 
 The hyperelastic laws solve S_zz = 0 for F_zz (in closed form for St Venant-Kirchhoff, by a few unrolled
 Newton steps, converged to round-off, for neo-Hookean).
 
+3D (the model "solid"): every update takes the full 3x3 gradient; the S-R updates split the
+increment with the general form of the decomposition (a rotation about an axis by an angle,
+kinematics.sr_decomposition) and differentiate it in closed form
+(kinematics.sr_decomposition_direction); the polar update's rotation comes from an unrolled Newton
+iteration (kinematics.polar_rotation_3d). The 2D models keep the one-angle specialisations.
+
 The elastic constants come as any object with ``mu``, ``lmbda`` and ``lmbda_plane_stress``: numbers
 (material_data.Elastic) or UFL values (the model's ElasticConstants, so that the compiled code does not
 depend on them).
@@ -48,9 +54,11 @@ from .kinematics import (
     in_plane_angle,
     increment_gradient,
     polar_rotation_2d,
+    polar_rotation_3d,
+    sr_decomposition,
+    sr_decomposition_direction,
     sr_decomposition_in_plane,
     to_tensor,
-    to_vec,
 )
 
 
@@ -127,15 +135,33 @@ class SRUpdate(StressUpdate):
 
     def build(self, u, u_n, state_n):
         dH = increment_gradient(self.F(u), self.F(u_n))
-        dS, dR, _ = sr_decomposition_in_plane(dH)      # the 2D models' rotation: one angle
+        if self.kin.solid:                             # a rotation about an axis by an angle
+            dS, dR, _ = sr_decomposition(dH)
+        else:                                          # the 2D models' rotation: one angle
+            dS, dR, _ = sr_decomposition_in_plane(dH)
         sig_rot = dR * to_tensor(state_n) * dR.T
         sig = sig_rot + hooke(self.strain(dS), self.elastic, self.kin.model)
         return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
+
+    def _directional_3d(self, u, u_n, state_n, du, up):
+        """:meth:`directional` in 3D: the general split's closed-form derivative
+        (kinematics.sr_decomposition_direction), d sigma_rot = dR s_n R^T + R s_n dR^T."""
+        F, F_n = self.F(u), self.F(u_n)
+        H = increment_gradient(F, F_n)
+        G = ufl.derivative(F, u, du) * ufl.inv(F_n)
+        S, R, _ = sr_decomposition(H)
+        dS, dR = sr_decomposition_direction(H, G)
+        s_n = to_tensor(state_n)
+        a = dR * s_n * R.T
+        drot = a + a.T
+        return drot + hooke(self.strain_direction(S, dS), self.elastic, self.kin.model), drot
 
     def directional(self, u, u_n, state_n, du, up):
         """In closed form (docs/theory.md section 3.2): with G = d(dH) = dF F_n^-1, the angle's
         d theta = (G10 - G01) / (2 cos theta), d S = sym G + sin(theta) d theta diag(1, 1, 0) and
         d sigma_rot = d theta (Z sigma_rot - sigma_rot Z), Z the in-plane quarter turn."""
+        if self.kin.solid:
+            return self._directional_3d(u, u_n, state_n, du, up)
         F, F_n = self.F(u), self.F(u_n)
         H = increment_gradient(F, F_n)
         G = ufl.derivative(F, u, du) * ufl.inv(F_n)
@@ -169,11 +195,18 @@ class SRLogUpdate(SRUpdate):
 
     name = "sr_log"
 
+    def _inverse(self, dS):
+        """(I + dS/2)^-1: in closed form for the 2D models' block-diagonal dS, UFL's 3x3 inverse
+        in 3D."""
+        if self.kin.solid:
+            return ufl.inv(ufl.Identity(3) + 0.5 * dS)
+        return _half_step_inverse(dS)
+
     def strain(self, dS):
-        return 2.0 * (ufl.Identity(3) - _half_step_inverse(dS))
+        return 2.0 * (ufl.Identity(3) - self._inverse(dS))
 
     def strain_direction(self, dS, d_dS):
-        Minv = _half_step_inverse(dS)
+        Minv = self._inverse(dS)
         return Minv * d_dS * Minv
 
 
@@ -207,11 +240,12 @@ class PolarUpdate(StressUpdate):
     def build(self, u, u_n, state_n):
         F, F_n = self.F(u), self.F(u_n)
         dH, F_mid = _mid_step(F, F_n)
-        R_mid = polar_rotation_2d(F_mid)
+        polar = polar_rotation_3d if self.kin.solid else polar_rotation_2d
+        R_mid = polar(F_mid)
         de_hat = R_mid.T * ufl.sym(dH) * R_mid
         s_hat = to_tensor(state_n) + hooke(de_hat, self.elastic, self.kin.model)
-        R = polar_rotation_2d(F)
-        return UpdateExpr(R * s_hat * R.T, state_new=to_vec(s_hat), F22=self.thickness_stretch(u))
+        R = polar(F)
+        return UpdateExpr(R * s_hat * R.T, state_new=self.kin.vec(s_hat), F22=self.thickness_stretch(u))
 
 
 class SVKUpdate(StressUpdate):
