@@ -15,7 +15,7 @@ The public API (docs/api.md), imported on first use so that ``import comove_dolf
     results = cm.Job(body, items, [cm.Step(20)], probes=[cm.NodeDisplacement("tip", (10, 0))]).run()
 """
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 
 try:        # the PyPI wheel of dolfinx: its bootstrap loads mpi4py's MPI ahead of dolfinx's bindings
     import dolfinx_solver  # noqa: F401

@@ -40,7 +40,7 @@
     column = "force"
     scale = -2.0
 
-Everything is checked here, before dolfinx is imported: every key's type and range (RANGES, the
+Everything is checked here, before dolfinx is imported: every key's type and range (problem_schema.py, the
 ``NewtonSettings`` fields through checks.newton_error, the material through ``Elastic`` and
 ``Hardening``), the builder's sizes in their order and the number of cells they would make
 (checks.mesh_size_error), and the names the steps and probes refer to. A bad file gets one line that
@@ -49,120 +49,14 @@ file.
 """
 from __future__ import annotations
 
-import math
 import pathlib
 import tomllib
 
-from .checks import choice, mesh_size_error, newton_error, number, text
+from .checks import mesh_size_error, newton_error
+from .choices import PLASTIC_UPDATES, first_increment_error
 from .mechanics.material_data import Elastic, Hardening, MaterialError
-from .choices import (CONTACT_METHODS, FRICTION_LAWS, MODELS, PLASTIC_UPDATES, PREDICTORS, UPDATES,
-                    first_increment_error)
-
-
-class ProblemError(ValueError):
-    """A problem file that cannot be used; the message names the key and the fix."""
-
-
-BUILDERS = {"rectangle": ("L", "H", "size"), "annulus_sector": ("r_in", "r_out", "size"),
-            "plate_section": ("R", "t", "z_support", "size"), "quarter_disc": ("R", "size", "size_contact",
-                                                                            "contact_zone")}
-ITEMS = {"fixed": {"boundary": str, "component": int},
-         "displacement": {"boundary": str, "value": "vector|number", "component": int},
-         "pressure": {"boundary": str, "p": float},
-         "traction": {"boundary": str, "vector": "vector"},
-         "body_force": {"vector": "vector"},
-         "point_load": {"point": "vector", "vector": "vector"},
-         "contact": {"boundary": str, "obstacle": dict, "method": str, "gamma0": float, "theta": int,
-                     "mu": float, "relag": bool, "friction": str, "gamma0_t": float, "max_passes": int,
-                     "relag_tol": float}}
-REQUIRED = ("boundary", "p", "vector", "point", "obstacle", "value")
-OBSTACLES = {"plane": {"point": "vector", "normal": "vector", "motion": "vector"},
-             "circle": {"centre": "vector", "radius": float, "motion": "vector"},
-             "profile": {"points": "points", "radius": float, "motion": "vector"},
-             "gmsh_profile": {"file": str, "curve": str, "radius": float, "spacing": float, "motion": "vector"}}
-OPTIONAL = ("motion", "spacing")
-PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": str},
-          "contact_force": {"item": str, "column": str, "component": int, "scale": float},
-          "contact_length": {"item": str, "column": str, "scale": float},
-          "contact_peak": {"item": str, "column": str, "scale": float},
-          "reaction": {"boundary": str, "name": str},
-          "max_plastic_strain": {}}
-SECTIONS = {"mesh", "body", "items", "steps", "newton", "probes"}
-LAWS = ("elastic", "j2", "chen")
-
-
-def _positive(key, value):
-    return number(key, value, gt=0)
-
-
-def _kind(key, value):
-    """A body's kind: one of MODELS, and not (yet) the 3D model, which problem files do not describe."""
-    why = choice(key, value, MODELS)
-    if why is None and value == "solid":
-        return (f"{key} = 'solid': problem files describe 2D bodies; build a 3D body from Python "
-                "(cm.Body(cm.box(...), 'solid', ...))")
-    return why
-
-
-#: the values a key may take, wherever it stands (its type is checked first): the message or None
-RANGES = {
-    "kind": _kind, "update": lambda k, v: choice(k, v, UPDATES),
-    "degree": lambda k, v: choice(k, v, (1, 2)), "order": lambda k, v: choice(k, v, (1, 2)),
-    "law": lambda k, v: choice(k, v, LAWS), "component": lambda k, v: choice(k, v, (0, 1), " (0: x, 1: y)"),
-    "thickness": _positive, "gamma0": _positive, "gamma0_t": _positive, "radius": _positive,
-    "spacing": _positive, "relag_tol": _positive,
-    "mu": lambda k, v: number(k, v, ge=0, what=" (the friction coefficient)"),
-    "theta": lambda k, v: choice(k, v, (1, 0, -1), " (Nitsche's variant)"),
-    "method": lambda k, v: choice(k, v, CONTACT_METHODS), "friction": lambda k, v: choice(k, v, FRICTION_LAWS),
-    "max_passes": lambda k, v: number(k, v, ge=1, whole=True),
-    "n": lambda k, v: number(k, v, ge=1, le=1_000_000, whole=True, what=" of increments"),
-    "predictor": lambda k, v: choice(k, v, tuple(PREDICTORS)),
-    "max_cutbacks": lambda k, v: number(k, v, ge=0, le=30, whole=True),
-    **{k: (lambda k, v: text(k, v)) for k in ("name", "boundary", "column", "item", "curve", "file")},
-}
-WANT = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false", dict: "a table",
-        list: "a list of item names", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
-        "vector|number": "a finite number or [x, y]", "names": "a list of names",
-        "table": "rows [strain, stress]: [[0, sigma_y], ...]"}
-
-
-def _real(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _typed(kind, value) -> bool:
-    """Whether ``value`` is of the kind ``kind`` of a spec (a type or a word of WANT)."""
-    if kind is float:
-        return _real(value)
-    if kind is int:
-        return isinstance(value, int) and not isinstance(value, bool)
-    if kind in (str, bool, dict):
-        return isinstance(value, kind)
-    if kind in (list, "names"):
-        return isinstance(value, list) and all(isinstance(v, str) for v in value)
-    if kind in ("vector", "vector|number"):
-        return (isinstance(value, list) and len(value) == 2 and all(_real(v) for v in value)) or (
-            kind == "vector|number" and _real(value))
-    return isinstance(value, list) and len(value) >= (2 if kind == "points" else 1) and all(   # points, table
-        isinstance(p, list) and len(p) == 2 and all(_real(v) for v in p) for p in value)
-
-
-def _check(where: str, table: dict, spec: dict, required=()) -> dict:
-    """Keys of ``table`` against ``spec`` (key -> type), then against RANGES; returns the table."""
-    if not isinstance(table, dict):
-        raise ProblemError(f"{where}: expected a table of keys, got {table!r}")
-    for key, value in table.items():
-        if key not in spec:
-            raise ProblemError(f"{where}: unknown key {key!r}; the keys are {', '.join(spec) or 'none'}")
-        if not _typed(spec[key], value):
-            raise ProblemError(f"{where}: {key} = {value!r}: give {WANT[spec[key]]}")
-        why = RANGES[key](key, value) if key in RANGES else None
-        if why is not None:
-            raise ProblemError(f"{where}: {why}")
-    for key in required:
-        if key not in table:
-            raise ProblemError(f"{where}: {key} is missing: add it")
-    return table
+from .problem_schema import (BUILDERS, ITEMS, OBSTACLES, OPTIONAL, PROBES, REQUIRED, SECTIONS,
+                             ProblemError, _check)
 
 
 def _load(path: pathlib.Path) -> dict:
