@@ -113,6 +113,9 @@ class Contact(Item):
     def attach(self, ctx):
         """The contact terms of the residual (UFL, linear in the test function); builds the item's
         parts."""
+        if ctx.mesh.topology.dim == 3:
+            raise ContactError(f"contact on {self.boundary!r}: contact of 3D bodies (kind 'solid') is not "
+                               "available; the 2D bodies (plane_strain, plane_stress, axisymmetric) take it")
         self.comm, self.u, self._u_n = ctx.mesh.comm, ctx.u, ctx.u_n
         self.obstacle.bind(ctx.mesh)
         self.obstacle.set(self.factor)

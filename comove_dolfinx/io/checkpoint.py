@@ -28,7 +28,7 @@ from mpi4py import MPI
 
 from ..parallel import collective, on_root
 from .csv_tables import current_names
-from .writers import Writer, write_atomic
+from .writers import Writer, planar_only, write_atomic
 
 
 class CheckpointError(ValueError):
@@ -103,6 +103,7 @@ class Checkpoint(Writer):
         self._pending = None                 # (increment, packed arrays, meta) not yet on disk
 
     def open(self, run) -> None:
+        planar_only(run, 'a checkpoint')
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
         self.count = len(run.resumed_rows)
         self._prev, self._ranks = None, run.comm.size

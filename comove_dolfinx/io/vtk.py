@@ -30,7 +30,7 @@ from .. import compat
 from ..checks import first, flag, text
 from ..parallel import on_root
 from .folder import FolderError
-from .writers import Writer
+from .writers import Writer, planar_only
 from .xdmf import FibreStress
 
 # dolfinx's P2 triangle: vertices 0, 1, 2, then the edges opposite them (1-2, 0-2, 0-1);
@@ -82,6 +82,7 @@ class VTK(Writer):
 
     # -- set-up ---------------------------------------------------------------------------------
     def open(self, run) -> None:
+        planar_only(run, 'VTK output')
         m = run.model
         self.model, self.comm = m, m.comm
         V = m.V

@@ -23,7 +23,7 @@ from dolfinx import fem, io
 
 from .. import compat
 from ..mechanics.kinematics import fibre_stress, to_tensor
-from .writers import Writer
+from .writers import Writer, planar_only
 
 
 class FibreStress:
@@ -58,6 +58,7 @@ class XDMF(Writer):
         self.file = None
 
     def open(self, run) -> None:
+        planar_only(run, 'XDMF output')
         model = run.model
         msh = model.mesh
         gdeg = compat.geometry_degree(msh)
