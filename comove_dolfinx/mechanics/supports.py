@@ -15,18 +15,25 @@ from mpi4py import MPI
 from .. import compat
 
 
+def _centred(V, dim: int) -> tuple[int, np.ndarray, np.ndarray, float]:
+    """(owned nodes n, their positions d relative to the centroid c of all the nodes, c, the rms
+    distance ``size`` of the nodes from c) of the displacement space V. Collective."""
+    n = V.dofmap.index_map.size_local
+    X = V.tabulate_dof_coordinates()[:n, :dim]
+    comm = V.mesh.comm
+    total = max(comm.allreduce(n, op=MPI.SUM), 1)
+    c = comm.allreduce(X.sum(axis=0), op=MPI.SUM) / total
+    d = X - c
+    size = float(np.sqrt(comm.allreduce(float((d ** 2).sum()), op=MPI.SUM) / total)) or 1.0
+    return n, d, c, size
+
+
 def rigid_motions(V) -> tuple[np.ndarray, np.ndarray, float]:
     """The two translations and the in-plane rotation of the 2-D displacement space V at this
     rank's owned nodes, (nodes, component, motion); the rotation is about the centroid c of all the
     nodes and divided by their rms distance ``size`` from it, so that the three are of one
     magnitude. Returns (modes, c, size). Collective."""
-    n = V.dofmap.index_map.size_local
-    xy = V.tabulate_dof_coordinates()[:n, :2]
-    comm = V.mesh.comm
-    total = max(comm.allreduce(n, op=MPI.SUM), 1)
-    c = comm.allreduce(xy.sum(axis=0), op=MPI.SUM) / total
-    d = xy - c
-    size = float(np.sqrt(comm.allreduce(float((d ** 2).sum()), op=MPI.SUM) / total)) or 1.0
+    n, d, c, size = _centred(V, 2)
     modes = np.zeros((n, 2, 3))
     modes[:, 0, 0] = modes[:, 1, 1] = 1.0
     modes[:, 0, 2], modes[:, 1, 2] = -d[:, 1] / size, d[:, 0] / size
@@ -37,13 +44,7 @@ def rigid_motions_3d(V) -> tuple[np.ndarray, np.ndarray, float]:
     """The three translations and the three rotations (about x, y, z through the centroid, scaled as
     in :func:`rigid_motions`) of a 3D displacement space V at this rank's owned nodes, (nodes,
     component, motion). Returns (modes, c, size). Collective."""
-    n = V.dofmap.index_map.size_local
-    X = V.tabulate_dof_coordinates()[:n, :3]
-    comm = V.mesh.comm
-    total = max(comm.allreduce(n, op=MPI.SUM), 1)
-    c = comm.allreduce(X.sum(axis=0), op=MPI.SUM) / total
-    d = X - c
-    size = float(np.sqrt(comm.allreduce(float((d ** 2).sum()), op=MPI.SUM) / total)) or 1.0
+    n, d, c, size = _centred(V, 3)
     modes = np.zeros((n, 3, 6))
     for k in range(3):
         modes[:, k, k] = 1.0
