@@ -11,7 +11,9 @@ Each item carries a factor (loads.py); a :class:`Step` moves the factors over it
 ``ramp=None`` takes every item to 1 from where it stands, ``ramp={item: target}`` the items named
 (a number, or a callable of the step's fraction s in [0, 1] for a path of its own) while the others
 hold. The history's ``time`` runs from k - 1 to k over step k; its ``load`` is ``time`` unless the
-job maps it (``load=lambda time: ...``, e.g. a physical load level), and is the XDMF time.
+job maps it (``load=lambda time: ...``, e.g. a physical load level). The field writers (VTK, XDMF)
+label each increment's fields with its ``time``, which always increases (the load may go down and
+up again).
 
 Data flows one way: the job compiles the model, runs the increment loop of each step
 (solver/increments.py), turns every converged increment into a history row (the probes) and gives
