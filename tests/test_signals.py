@@ -46,6 +46,14 @@ def _before_the_command(stderr) -> bool:
     return "comove_dolfinx" not in stderr and not stderr.startswith("comove:")
 
 
+def _launcher_forwards_after_a_signal() -> bool:
+    """Whether the MPI launcher passes on what the ranks write after it has been signalled: Open MPI
+    4's mpirun does; Open MPI 5's (PRRTE) stops forwarding the ranks' output at the signal, so the
+    ranks' one line never reaches the terminal (their run.json still says how the run ended)."""
+    p = subprocess.run([launch.LAUNCHER, "--version"], capture_output=True, text=True)
+    return "Open MPI" not in p.stdout or " 5." not in p.stdout
+
+
 def _status(out):
     """run.json's status, or None without one."""
     path = out / "run.json"
@@ -92,7 +100,8 @@ def test_ctrl_c_on_two_ranks_ends_every_rank(tmp_path, delay):
     if _before_the_command(stderr) and not out.exists():
         pytest.skip(f"the signal at {delay} s came while the interpreters were starting (a loaded machine)")
     assert "Traceback" not in stderr, stderr
-    assert [line for line in stderr.splitlines() if line.startswith("comove: interrupted")], stderr
+    if _launcher_forwards_after_a_signal():
+        assert [line for line in stderr.splitlines() if line.startswith("comove: interrupted")], stderr
     assert _status(out) in (None, "interrupted")
 
 
