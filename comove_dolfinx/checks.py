@@ -182,11 +182,12 @@ def _cells_quarter_disc(p: dict) -> float:
 
 def _cells_graded_3d(volume: float, p: dict) -> float:
     """Unstructured tetrahedra in ``volume``: the volume at each distance r from the refined point
-    over that of a regular tetrahedron of the size there (as for the quarter disc; an eighth of the
-    ball near the point). An upper estimate: gmsh's tetrahedra are larger on average (about 1.5 times)."""
+    over that of a tetrahedron of the size there (as for the quarter disc; an eighth of the ball near
+    the point). Gmsh's tetrahedra of target edge s have on average 1.7 times the volume of the regular
+    one, s^3 / (6 sqrt 2) (measured on the builders' meshes: the estimate within 15 %)."""
     size, fine = p["size"], p.get("size_contact", p["size"])
     zone, growth = p.get("contact_zone", 0.0), p.get("growth", 0.25)
-    tet = size ** 3 / (6.0 * math.sqrt(2.0))
+    tet = 1.7 * size ** 3 / (6.0 * math.sqrt(2.0))
     if "size_contact" not in p:
         return volume / tet
     v_fine = min(math.pi * zone ** 3 / 6.0, volume)
@@ -221,8 +222,9 @@ CELLS = {
 
 
 def mesh_cells(builder: str, params: dict) -> float:
-    """The number of cells (triangles; tetrahedra for the 3D builders) the builder ``builder`` makes from ``params`` (an estimate for the
-    unstructured quarter_disc, tube_sector and sphere_octant); inf when the sizes are so small that the count overflows."""
+    """The number of cells (triangles; tetrahedra for the 3D builders) the builder ``builder`` makes
+    from ``params`` (an estimate for the unstructured quarter_disc, tube_sector and sphere_octant);
+    inf when the sizes are so small that the count overflows."""
     try:
         return float(CELLS[builder](params))
     except OverflowError:

@@ -130,8 +130,10 @@ def test_cache_reuses_the_file(cache):
 @pytest.mark.parametrize("call, message", [
     (lambda c: geometry.tube_sector(1.5, 1.0, 1.0, 0.2, cache_dir=c),
      r"^r_in must be smaller than r_out, got r_in=1\.5, r_out=1\.0$"),
-    (lambda c: geometry.tube_sector(1.0, 1.5, 1.0, -0.2, cache_dir=c), r"^size must be a finite number > 0, got -0\.2$"),
-    (lambda c: geometry.tube_sector(1.0, 1.5, 0.0, 0.2, cache_dir=c), r"^length must be a finite number > 0, got 0\.0$"),
+    (lambda c: geometry.tube_sector(1.0, 1.5, 1.0, -0.2, cache_dir=c),
+     r"^size must be a finite number > 0, got -0\.2$"),
+    (lambda c: geometry.tube_sector(1.0, 1.5, 0.0, 0.2, cache_dir=c),
+     r"^length must be a finite number > 0, got 0\.0$"),
     (lambda c: geometry.tube_sector(1.0, 1.5, 1.0, 0.2, angle=4.0, cache_dir=c),
      r"^angle must lie in \(0, pi\] \(radians; pi/2 is a quarter\), got 4\.0$"),
     (lambda c: geometry.tube_sector(1.0, 1.5, 1.0, 0.2, order=3, cache_dir=c), r"^order must be 1 or 2, got 3$"),
@@ -231,3 +233,16 @@ def test_tube_sector_under_internal_pressure_is_lame(cache):
     err = np.abs((x[:, 0] * u[:, 0] + x[:, 1] * u[:, 1]) / r - exact).max() / exact.max()
     print(f"tube: max |u_r - Lame| / max u_r = {err:.2e}")
     assert err < 2e-3 and np.abs(u[:, 2]).max() < 2e-3 * exact.max()      # no exact plane strain on tetrahedra
+
+
+def test_cell_estimates_are_the_builders_counts(cache):
+    """The count the size check uses is within 15 % of the tetrahedra gmsh makes (uniform and
+    refined meshes), so the limit refuses what would be too large and little else."""
+    from comove_dolfinx.checks import mesh_cells
+    cases = [("tube_sector", dict(r_in=1.0, r_out=1.5, length=2.0, size=0.1)),
+             ("sphere_octant", dict(R=1.0, size=0.08)),
+             ("sphere_octant", dict(R=50.0, size=8.0, size_contact=0.8, contact_zone=12.0, growth=0.25))]
+    for name, params in cases:
+        md = getattr(geometry, name)(**params, cache_dir=cache)
+        n = md.mesh.topology.index_map(3).size_global
+        assert abs(mesh_cells(name, params) / n - 1.0) < 0.15, (name, params, mesh_cells(name, params), n)
