@@ -25,7 +25,7 @@ except ModuleNotFoundError:
 
 _API = {
     "geometry": ("MeshData", "MeshError", "rectangle", "annulus_sector", "plate_section", "quarter_disc",
-                 "necking_bar", "necking_bar_grid", "box", "load_msh", "from_dolfinx"),
+                 "necking_bar", "necking_bar_grid", "box", "tube_sector", "sphere_octant", "load_msh", "from_dolfinx"),
     "mechanics.body": ("Body", "BodyError"),
     "mechanics.materials": ("Elastic", "J2", "Chen", "Hardening", "MaterialError"),
     "loads": ("Fixed", "Displacement", "Pressure", "Traction", "BodyForce", "PointLoad", "ItemError"),

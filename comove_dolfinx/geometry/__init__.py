@@ -2,8 +2,9 @@
 
 Every builder makes a triangle mesh in the (x, y) plane (gdim = 2; for the axisymmetric plate x is the
 radius r and y the axial coordinate z) with straight-sided (order 1) or curved (order 2, mid-side nodes on
-the true arcs) triangles; :func:`box` makes tetrahedra in 3D (gdim = 3, named faces instead of
-curves, for the model "solid"). Lengths are in the user's units (the scenes use cm).
+the true arcs) triangles; :func:`box`, :func:`tube_sector` and :func:`sphere_octant` make tetrahedra
+in 3D (gdim = 3, named faces instead of curves, for the model "solid"; order 2 puts the mid-edge nodes
+on the true cylinders and sphere). Lengths are in the user's units (the scenes use cm).
 
 Physical groups: one surface group "body" (cell tag ``BODY_TAG``) and one named curve group per boundary
 part; their tag values, distinct per name and numbered from 1 in the order listed by each builder, are in
@@ -20,7 +21,7 @@ demos/demo_seal.py does), ``gmsh_session.start()``/``stop()`` keep Python's Ctrl
 gmsh's own calls replace by the system's default (the process then dies at Ctrl-C without a word).
 """
 from .builders import annulus_sector, necking_bar, necking_bar_grid, plate_section, quarter_disc, rectangle
-from .builders3d import box
+from .builders3d import box, sphere_octant, tube_sector
 from .meshes import (
            BODY_TAG,
            MeshData,
@@ -31,4 +32,5 @@ from .meshes import (
 )
 
 __all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "box", "fix_coordinate_element", "from_dolfinx",
-           "load_msh", "necking_bar", "necking_bar_grid", "plate_section", "quarter_disc", "rectangle"]
+           "load_msh", "necking_bar", "necking_bar_grid", "plate_section", "quarter_disc", "rectangle",
+           "sphere_octant", "tube_sector"]

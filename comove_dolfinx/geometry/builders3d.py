@@ -9,7 +9,7 @@ from mpi4py import MPI
 
 from .builders import _check_order, _not_too_fine, _positive, _structured
 from .gmsh_session import gmsh
-from .meshes import BODY_TAG, MeshData, add_group, build_cached
+from .meshes import BODY_TAG, MeshData, MeshError, add_group, build_cached
 
 
 def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float = 0.0, y0: float = 0.0,
@@ -63,3 +63,178 @@ def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float 
             add_group(2, [faces[name]], tag, name)
 
     return build_cached("box", params, construct, comm, cache_dir, dim=3)
+
+
+def _check_refinement(size: float, size_contact, contact_zone, growth: float) -> dict:
+    """The refinement parameters to hash (empty without ``size_contact``); MeshError if unusable."""
+    if size_contact is None:
+        return {}
+    _positive(size_contact=size_contact, contact_zone=contact_zone, growth=growth)
+    if size_contact > size:
+        raise MeshError(f"size_contact must not exceed size = {size}, got {size_contact!r}")
+    return dict(size_contact=float(size_contact), contact_zone=float(contact_zone), growth=float(growth))
+
+
+def _sizes_near(point: tuple, size: float, refine: dict) -> None:
+    """Element size ``size`` everywhere, or (with ``refine``) ``size_contact`` within ``contact_zone``
+    of ``point``, growing by ``growth`` per unit distance up to ``size`` (the only size source)."""
+    fields = gmsh.model.mesh.field
+    for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+        gmsh.option.setNumber(f"Mesh.{option}", 0)
+    if not refine:
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+        return
+    distance = fields.add("MathEval")
+    x, y, z = (repr(float(c)) for c in point)
+    fields.setString(distance, "F", f"Sqrt((x - ({x}))^2 + (y - ({y}))^2 + (z - ({z}))^2)")
+    fine, zone = refine["size_contact"], refine["contact_zone"]
+    threshold = fields.add("Threshold")
+    fields.setNumber(threshold, "InField", distance)
+    fields.setNumber(threshold, "SizeMin", fine)
+    fields.setNumber(threshold, "SizeMax", size)
+    fields.setNumber(threshold, "DistMin", zone)
+    fields.setNumber(threshold, "DistMax", zone + (size - fine) / refine["growth"])
+    fields.setAsBackgroundMesh(threshold)
+
+
+def _faces_where(dim_tags: list, test) -> list[int]:
+    """The OCC faces among ``dim_tags`` whose centre of mass (x, y, z) passes ``test``."""
+    return [tag for dim, tag in dim_tags if dim == 2 and test(gmsh.model.occ.getCenterOfMass(2, tag))]
+
+
+def _tube_groups(volume: int, r_in: float, r_out: float, length: float, angle: float, tol: float) -> None:
+    """Physical groups of the tube sector (the OCC ``volume``, synchronized)."""
+    faces = gmsh.model.getBoundary([(3, volume)], oriented=False)
+    c, s = math.cos(math.pi / 2 - angle), math.sin(math.pi / 2 - angle)
+    inside = (lambda m: tol < m[2] < length - tol)           # not an end face
+    on_plane = {
+        "xsym": lambda m: abs(m[0]) < tol and m[1] > tol and inside(m),
+        "side": lambda m: abs(-s * m[0] + c * m[1]) < tol and c * m[0] + s * m[1] > tol and inside(m),
+        "zsym": lambda m: abs(m[2]) < tol,
+        "end": lambda m: abs(m[2] - length) < tol,
+    }
+    groups = {name: _faces_where(faces, test) for name, test in on_plane.items()}
+    flat = {t for tags in groups.values() for t in tags}
+    curved = [tag for dim, tag in faces if tag not in flat]
+    radius = {tag: gmsh.model.occ.getMass(2, tag) / (angle * length) for tag in curved}  # area = r angle L
+    groups["inner"] = [t for t in curved if radius[t] < 0.5 * (r_in + r_out)]
+    groups["outer"] = [t for t in curved if t not in groups["inner"]]
+    if abs(angle - math.pi) < 1e-12:
+        groups["xsym"] += groups.pop("side")
+    elif abs(angle - math.pi / 2) < 1e-12:
+        groups["ysym"] = groups.pop("side")
+    add_group(3, [volume], BODY_TAG, "body")
+    for tag, name in enumerate(n for n in ("inner", "outer", "xsym", "ysym", "side", "zsym", "end")
+                               if n in groups):
+        add_group(2, groups[name], tag + 1, name)
+
+
+def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: float = math.pi / 2,
+                order: int = 2, size_contact: float | None = None, contact_zone: float | None = None,
+                growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
+                cache_dir: str | os.PathLike = "meshes") -> MeshData:
+    """A sector of a thick-walled tube along z: r_in <= r <= r_out, pi/2 - angle <= theta <= pi/2
+    (theta from the x axis), 0 <= z <= length; unstructured tetrahedra.
+
+    The sector always contains the top line x = 0, y = r_out, so a transverse tool pressing along -y
+    at z = 0 touches the point (0, r_out, 0): ``angle = pi`` with the symmetry faces x = 0 and z = 0
+    is the quarter model of a tube dented there (the half section x >= 0 over half the length),
+    ``angle = pi / 2`` the quarter x, y >= 0.
+
+    Parameters
+    ----------
+    r_in, r_out
+        Inner and outer radius (0 < r_in < r_out).
+    length
+        Length along z.
+    size
+        Element size (gmsh's target edge length).
+    angle
+        Opening of the sector in radians, 0 < angle <= pi.
+    order
+        Geometry order, 1 or 2 (mid-side nodes on the true cylinders).
+    size_contact, contact_zone, growth
+        With ``size_contact`` (<= size): elements of that size within ``contact_zone`` of
+        (0, r_out, 0), growing by ``growth`` per unit distance up to ``size``.
+    comm, cache_dir
+        As for ``rectangle``.
+
+    Returns
+    -------
+    MeshData
+        Facet tags, numbered from 1 in this order: inner (r = r_in), outer (r = r_out), xsym (the
+        radial face on x = 0, y > 0), the other radial face (theta = pi/2 - angle): "ysym" for
+        angle = pi/2 (on y = 0), part of "xsym" for angle = pi (on x = 0, y < 0), "side" otherwise;
+        zsym (z = 0), end (z = length). Cells "body" = BODY_TAG.
+    """
+    _positive(r_in=r_in, r_out=r_out, length=length, size=size, angle=angle)
+    order = _check_order(order)
+    if not r_in < r_out:
+        raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
+    if not angle <= math.pi:
+        raise MeshError(f"angle must lie in (0, pi] (radians; pi/2 is a quarter), got {angle!r}")
+    refine = _check_refinement(size, size_contact, contact_zone, growth)
+    params = dict(r_in=float(r_in), r_out=float(r_out), length=float(length), size=float(size),
+                  angle=float(angle), order=order, **refine)
+    _not_too_fine("tube_sector", params)
+
+    def construct() -> None:
+        occ = gmsh.model.occ
+        turn = [(3, occ.addCylinder(0, 0, 0, 0, 0, length, r, angle=angle)) for r in (r_out, r_in)]
+        wall = occ.cut([turn[0]], [turn[1]])[0]
+        occ.rotate(wall, 0, 0, 0, 0, 0, 1, math.pi / 2 - angle)
+        occ.synchronize()
+        _tube_groups(wall[0][1], r_in, r_out, length, angle, 1e-7 * r_out)
+        _sizes_near((0.0, r_out, 0.0), size, refine)
+
+    return build_cached("tube_sector", params, construct, comm, cache_dir, dim=3)
+
+
+def sphere_octant(R: float, size: float, order: int = 2, size_contact: float | None = None,
+                  contact_zone: float | None = None, growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
+                  cache_dir: str | os.PathLike = "meshes") -> MeshData:
+    """The octant x, y, z >= 0 of the solid sphere of radius R centred at the origin; unstructured
+    tetrahedra, refined near the pole (0, 0, R) where a plane z = const touches it (Hertz).
+
+    Parameters
+    ----------
+    R
+        Radius.
+    size
+        Element size (gmsh's target edge length).
+    order
+        Geometry order, 1 or 2 (mid-side nodes on the true sphere).
+    size_contact, contact_zone, growth
+        With ``size_contact`` (<= size): elements of that size within ``contact_zone`` of the pole
+        (0, 0, R), growing by ``growth`` per unit distance up to ``size``.
+    comm, cache_dir
+        As for ``rectangle``.
+
+    Returns
+    -------
+    MeshData
+        Facet tags xsym (x = 0) = 1, ysym (y = 0) = 2, zsym (z = 0) = 3, outer (the sphere) = 4;
+        cells "body" = BODY_TAG.
+    """
+    _positive(R=R, size=size)
+    order = _check_order(order)
+    refine = _check_refinement(size, size_contact, contact_zone, growth)
+    params = dict(R=float(R), size=float(size), order=order, **refine)
+    _not_too_fine("sphere_octant", params)
+
+    def construct() -> None:
+        occ = gmsh.model.occ
+        occ.addSphere(0, 0, 0, R, 1, 0.0, math.pi / 2, math.pi / 2)
+        occ.synchronize()
+        faces, tol = gmsh.model.getBoundary([(3, 1)], oriented=False), 1e-7 * R
+        groups = {name: _faces_where(faces, lambda m, k=k: abs(m[k]) < tol)
+                  for k, name in enumerate(("xsym", "ysym", "zsym"))}
+        flat = {t for tags in groups.values() for t in tags}
+        groups["outer"] = [tag for dim, tag in faces if tag not in flat]
+        add_group(3, [1], BODY_TAG, "body")
+        for tag, name in enumerate(("xsym", "ysym", "zsym", "outer"), start=1):
+            add_group(2, groups[name], tag, name)
+        _sizes_near((0.0, 0.0, R), size, refine)
+
+    return build_cached("sphere_octant", params, construct, comm, cache_dir, dim=3)
