@@ -65,19 +65,13 @@ def test_solid_needs_a_3d_mesh(cache):
         NodeDisplacement("tip", (1.0, 0.0), component=2)
 
 
-def test_what_3d_bodies_do_not_take_is_refused_in_one_line(cache, tmp_path):
-    """Contact and the field writers (VTK, XDMF, checkpoints) are 2D only: a 3D job with one of them
-    stops with the project's error naming it and what to use, before any increment."""
+def test_contact_of_3d_bodies_is_refused_in_one_line(cache):
+    """Contact is 2D only: a 3D job with a contact item stops with the project's error naming it,
+    before any increment."""
     import comove_dolfinx as cm
     from comove_dolfinx.contact.obstacles import ContactError
-    from comove_dolfinx.io.checkpoint import Checkpoint
-    from comove_dolfinx.io.writers import OutputError
     md = geometry.box(1.0, 0.5, 0.25, 0.25, order=1, cache_dir=cache)
     body = Body(md, "solid", Elastic(1.0, 0.3), degree=1)
-    for writer, what in [(cm.VTK(tmp_path / "vtk"), "VTK output"), (cm.XDMF(tmp_path / "r.xdmf"), "XDMF output"),
-                         (Checkpoint(tmp_path / "ck"), "a checkpoint")]:
-        with pytest.raises(OutputError, match=f"^{what} of 3D bodies .* record them with probes and HistoryCSV$"):
-            cm.Job(body, [Fixed("left")], [cm.Step(1)], writers=[writer]).run()
     contact = cm.Contact("bottom", cm.Plane((0.0, -1.0), (0.0, 1.0)))
     with pytest.raises(ContactError, match="contact of 3D bodies .* is not available"):
         cm.Job(body, [Fixed("left"), contact], [cm.Step(1)]).run()

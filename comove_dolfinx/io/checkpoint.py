@@ -28,7 +28,7 @@ from mpi4py import MPI
 
 from ..parallel import collective, on_root
 from .csv_tables import current_names
-from .writers import Writer, planar_only, write_atomic
+from .writers import Writer, write_atomic
 
 
 class CheckpointError(ValueError):
@@ -41,7 +41,7 @@ def _owned(model, kind, arr, X=None):
     X = _local_coordinates(model, kind) if X is None else X
     if isinstance(kind, str) and kind == "V":
         n = model.V.dofmap.index_map.size_local
-        return X[:n], np.asarray(arr).reshape(-1, 2)[:n]
+        return X[:n], np.asarray(arr).reshape(-1, model.V.dofmap.index_map_bs)[:n]
     if isinstance(kind, str) and kind == "Q":
         tdim = model.mesh.topology.dim
         n = model.mesh.topology.index_map(tdim).size_local * model.rule.points.shape[0]
@@ -51,12 +51,14 @@ def _owned(model, kind, arr, X=None):
 
 
 def _local_coordinates(model, kind):
-    """Reference coordinates of the local entries of a kind of array ("V", "Q" or an item's space)."""
+    """Reference coordinates (entries, the body's dimension) of the local entries of a kind of array
+    ("V", "Q" or an item's space)."""
+    gdim = model.mesh.geometry.dim
     if isinstance(kind, str) and kind == "V":
-        return model.V.tabulate_dof_coordinates()[:, :2]
+        return model.V.tabulate_dof_coordinates()[:, :gdim]
     if isinstance(kind, str) and kind == "Q":
         return model.point_coordinates()
-    return kind.tabulate_dof_coordinates()[:, :2]
+    return kind.tabulate_dof_coordinates()[:, :gdim]
 
 
 def _pack(arrays: dict) -> tuple[dict, np.ndarray]:
@@ -103,7 +105,6 @@ class Checkpoint(Writer):
         self._pending = None                 # (increment, packed arrays, meta) not yet on disk
 
     def open(self, run) -> None:
-        planar_only(run, 'a checkpoint')
         on_root(run.comm, self.folder.mkdir, parents=True, exist_ok=True)
         self.count = len(run.resumed_rows)
         self._prev, self._ranks = None, run.comm.size

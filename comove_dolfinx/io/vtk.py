@@ -1,17 +1,17 @@
 """One ParaView dataset per converged increment: ``results.pvd`` and ``results_NNNNN.vtu``.
 
-Every ``.vtu`` holds the whole body on the displacement's mesh (quadratic triangles for P2, so every
-node of the solution is there) with all the fields of that increment, so that ParaView's open ->
-Warp By Vector -> colour by any field works on each time step:
+Every ``.vtu`` holds the whole body on the displacement's mesh, at its reference position (quadratic
+triangles or tetrahedra for P2, so every node of the solution is there) with all the fields of that
+increment, so that ParaView's open -> Warp By Vector -> colour by any field works on each time step:
 
-* point data: ``displacement`` (3 components, z = 0, for Warp By Vector) and, for every contact item,
-  ``contact_pressure`` (and ``contact_shear`` with friction): the pressure that the contact law gives,
-  per current area, projected onto the boundary's vertices with non-negative (linear) weights, so it
-  is never negative; zero away from the contact boundary;
+* point data: ``displacement`` (3 components; z = 0 for 2D bodies, for Warp By Vector) and, for
+  every contact item, ``contact_pressure`` (and ``contact_shear`` with friction): the pressure that
+  the contact law gives, per current area, projected onto the boundary's vertices with non-negative
+  (linear) weights, so it is never negative; zero away from the contact boundary;
 * cell data: ``cauchy_stress_cell_avg`` (3x3, the average over the cell of the stress at its
-  quadrature points; component zz is the out-of-plane or hoop stress), ``von_mises_cell_avg`` (of the
-  averaged stress), ``plastic_strain_cell_avg`` (elastic-plastic bodies) and the fibre stresses
-  (``<name>_cell_avg``).
+  quadrature points; for 2D bodies component zz is the out-of-plane or hoop stress),
+  ``von_mises_cell_avg`` (of the averaged stress), ``plastic_strain_cell_avg`` (elastic-plastic
+  bodies) and the fibre stresses (``<name>_cell_avg``).
 
 The collection ``results.pvd`` lists the increments with their time (the job's ``time`` column).
 Rank 0 gathers and writes; each file is written under a temporary name and renamed into place, so
@@ -30,12 +30,16 @@ from .. import compat
 from ..checks import first, flag, text
 from ..parallel import on_root
 from .folder import FolderError
-from .writers import Writer, planar_only
-from .xdmf import FibreStress
+from .writers import Writer
+from .xdmf import FibreStress, stress_tensors, von_mises
 
-# dolfinx's P2 triangle: vertices 0, 1, 2, then the edges opposite them (1-2, 0-2, 0-1);
-# VTK's quadratic triangle: vertices, then the edges 0-1, 1-2, 2-0
-_P2_TO_VTK = [0, 1, 2, 5, 3, 4]
+# (dimension, nodes per cell) -> meshio's cell type and the cell's nodes in VTK's order, or None.
+# dolfinx's P2 triangle: vertices 0, 1, 2, then the edges opposite them (1-2, 0-2, 0-1); VTK's
+# quadratic triangle: vertices, then the edges 0-1, 1-2, 2-0. dolfinx's (basix's) P2 tetrahedron:
+# vertices 0-3, then the edges 2-3, 1-3, 1-2, 0-3, 0-2, 0-1; VTK's quadratic tetrahedron: vertices,
+# then the edges 0-1, 1-2, 0-2, 0-3, 1-3, 2-3.
+_VTK_CELLS = {(2, 3): ("triangle", None), (2, 6): ("triangle6", [0, 1, 2, 5, 3, 4]),
+              (3, 4): ("tetra", None), (3, 10): ("tetra10", [0, 1, 2, 3, 9, 6, 8, 7, 5, 4])}
 
 
 def _atomic_write(path: pathlib.Path, write) -> None:
@@ -82,7 +86,6 @@ class VTK(Writer):
 
     # -- set-up ---------------------------------------------------------------------------------
     def open(self, run) -> None:
-        planar_only(run, 'VTK output')
         m = run.model
         self.model, self.comm = m, m.comm
         V = m.V
@@ -96,10 +99,9 @@ class VTK(Writer):
         self.n_cells = n_cells
         cells = compat.cell_dofs(V, n_cells)
         cells = imap.local_to_global(cells.ravel()).reshape(n_cells, -1)
-        if cells.shape[1] == 6:
-            cells, self.cell_type = cells[:, _P2_TO_VTK], "triangle6"
-        else:
-            self.cell_type = "triangle"
+        self.cell_type, order = _VTK_CELLS[(tdim, cells.shape[1])]
+        if order is not None:
+            cells = cells[:, order]
         parts = self.comm.gather((gidx, X, cells), root=0)
         self.gidx_all = [g for g, _, _ in parts] if self.comm.rank == 0 else None
         if self.comm.rank == 0:
@@ -146,21 +148,16 @@ class VTK(Writer):
 
     def write(self, run, row, increment) -> None:
         m, rule = self.model, self.model.rule
-        u = m.u.x.array.reshape(-1, 2)[: self.n_own]
-        point = {"displacement": np.hstack([u, np.zeros((self.n_own, 1))])}
+        u = m.u.x.array.reshape(-1, m.V.dofmap.index_map_bs)[: self.n_own]
+        point = {"displacement": np.hstack([u, np.zeros((self.n_own, 3 - u.shape[1]))])}
         for k, c in enumerate(self.contacts):
             suffix = f"_{k + 1}" if len(self.contacts) > 1 else ""
             c.update_fields()
             point[f"contact_pressure{suffix}"] = self._boundary_field(c, c.pressure)
             if c.mu > 0:
                 point[f"contact_shear{suffix}"] = self._boundary_field(c, c.shear)
-        sig = rule.cell_average(m.cauchy_stress())            # (cells, 4): xx, yy, zz, xy
-        T = np.zeros((sig.shape[0], 3, 3))
-        T[:, 0, 0], T[:, 1, 1], T[:, 2, 2] = sig[:, 0], sig[:, 1], sig[:, 2]
-        T[:, 0, 1] = T[:, 1, 0] = sig[:, 3]
-        s = T - np.trace(T, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
-        cell = {"cauchy_stress_cell_avg": T.reshape(-1, 9),
-                "von_mises_cell_avg": np.sqrt(1.5 * np.einsum("cij,cij->c", s, s))}
+        T = stress_tensors(rule.cell_average(m.cauchy_stress()))
+        cell = {"cauchy_stress_cell_avg": T.reshape(-1, 9), "von_mises_cell_avg": von_mises(T)}
         if m.plastic is not None:
             cell["plastic_strain_cell_avg"] = rule.cell_average(m.p.x.array)
         for f in self.fibres:

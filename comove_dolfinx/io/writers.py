@@ -17,14 +17,6 @@ class OutputError(ValueError):
     """A writer that cannot write this run; the message names what it takes instead."""
 
 
-def planar_only(run, what: str) -> None:
-    """OutputError if the run's body is three-dimensional: ``what`` (a writer) is there for the 2D
-    bodies only."""
-    if run.model.mesh.topology.dim == 3:
-        raise OutputError(f"{what} of 3D bodies (kind 'solid') is not available: record them with "
-                          "probes and HistoryCSV")
-
-
 class Writer:
     """Base class: every hook optional. ``run`` is the job's run state (comove_dolfinx.results.RunState:
     the job, its compiled model, the history's columns, the warnings so far, ...), ``row`` the

@@ -1,7 +1,7 @@
 """Fields per converged increment in XDMF (+ HDF5) for ParaView; time = the job's time column.
 
 ``displacement`` (exact: the mesh geometry has the displacement's degree, so every P2 node is written),
-``cauchy_stress`` (3x3, cell averages, index 2 = out-of-plane / hoop), ``von_mises`` (cell averages),
+``cauchy_stress`` (3x3, cell averages; in 2D index 2 = out-of-plane / hoop), ``von_mises`` (cell averages),
 ``plastic_strain`` (equivalent, elastic-plastic bodies), the normal stress along convected fibres
 (``fibres``: physical components on the convected base, cell averages, e.g. the ring's hoop stress)
 and, for every contact item, ``contact_pressure`` (and ``contact_shear`` with friction) on the
@@ -23,18 +23,37 @@ from dolfinx import fem, io
 
 from .. import compat
 from ..mechanics.kinematics import fibre_stress, to_tensor
-from .writers import Writer, planar_only
+from .writers import Writer
+
+
+# the stored stress vectors' components in the 3x3 tensor: 2D (xx, yy, zz, xy), 3D (xx, yy, zz, xy, yz, xz)
+_TENSOR_INDEX = {4: [(0, 0), (1, 1), (2, 2), (0, 1)], 6: [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)]}
+
+
+def stress_tensors(sig: np.ndarray) -> np.ndarray:
+    """Stored stress vectors (n, 4) of a 2D body or (n, 6) of a 3D body -> symmetric tensors (n, 3, 3)."""
+    T = np.zeros((sig.shape[0], 3, 3))
+    for k, (i, j) in enumerate(_TENSOR_INDEX[sig.shape[1]]):
+        T[:, i, j] = T[:, j, i] = sig[:, k]
+    return T
+
+
+def von_mises(T: np.ndarray) -> np.ndarray:
+    """Von Mises equivalent stress sqrt(3/2 s:s) of tensors (n, 3, 3)."""
+    s = T - np.trace(T, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+    return np.sqrt(1.5 * np.einsum("cij,cij->c", s, s))
 
 
 class FibreStress:
     """Normal Cauchy stress along the convected fibre a = F A of a reference direction A, a.sigma.a /
-    a.a (kinematics.fibre_stress), as cell averages in a DG0 function. ``A``: an in-plane vector, or
-    a function of the reference coordinates x (UFL) that returns one (e.g. the hoop direction)."""
+    a.a (kinematics.fibre_stress), as cell averages in a DG0 function. ``A``: a vector of the body's
+    dimension (in-plane in 2D), or a function of the reference coordinates x (UFL) that returns one
+    (e.g. the hoop direction)."""
 
     def __init__(self, model, name: str, A):
         rule = model.rule
         A = A(model.x) if callable(A) else A
-        A3 = ufl.as_vector([A[0], A[1], 0.0])
+        A3 = ufl.as_vector([A[0], A[1], A[2] if model.mesh.topology.dim == 3 else 0.0])
         self.rule = rule
         self.expr = rule.expression(fibre_stress(to_tensor(model.sigma), model.F, A3))
         DG0 = compat.function_space(model.mesh, "DG", 0)
@@ -58,7 +77,6 @@ class XDMF(Writer):
         self.file = None
 
     def open(self, run) -> None:
-        planar_only(run, 'XDMF output')
         model = run.model
         msh = model.mesh
         gdeg = compat.geometry_degree(msh)
@@ -82,13 +100,9 @@ class XDMF(Writer):
 
     def write(self, run, row, increment) -> None:
         m, rule = self.model, self.model.rule
-        sig = rule.cell_average(m.cauchy_stress())            # (cells, 4)
-        T = np.zeros((sig.shape[0], 3, 3))
-        T[:, 0, 0], T[:, 1, 1], T[:, 2, 2] = sig[:, 0], sig[:, 1], sig[:, 2]
-        T[:, 0, 1] = T[:, 1, 0] = sig[:, 3]
+        T = stress_tensors(rule.cell_average(m.cauchy_stress()))
         self.stress.x.array.reshape(-1, 9)[self.cell_dofs_T] = T.reshape(-1, 9)
-        s = T - np.trace(T, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
-        self.mises.x.array[self.cell_dofs] = np.sqrt(1.5 * np.einsum("cij,cij->c", s, s))
+        self.mises.x.array[self.cell_dofs] = von_mises(T)
         funcs = [m.u, self.stress, self.mises]
         if self.plastic is not None:
             self.plastic.x.array[self.cell_dofs] = rule.cell_average(m.p.x.array)

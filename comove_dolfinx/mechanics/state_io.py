@@ -38,7 +38,7 @@ class StateIO:
         return out
 
     def point_coordinates(self) -> np.ndarray:
-        """Reference coordinates (points, 2) of this rank's quadrature points (ghost cells too)."""
+        """Reference coordinates (points, the body's dimension) of this rank's quadrature points (ghost cells too)."""
         if self._xq is None:
             rule = self.model.rule
             self._xq = rule.evaluate(rule.expression(self.model.x))
