@@ -13,10 +13,6 @@ from tqdm import tqdm
 from ..parallel import on_root
 
 
-class OutputError(ValueError):
-    """A writer that cannot write this run; the message names what it takes instead."""
-
-
 class Writer:
     """Base class: every hook optional. ``run`` is the job's run state (comove_dolfinx.results.RunState:
     the job, its compiled model, the history's columns, the warnings so far, ...), ``row`` the
