@@ -369,7 +369,7 @@ def _check_early(args):
     except (SceneError, MaterialError, ProblemError) as err:
         return err
     from .io.folder import check
-    why = check(args.out, args.overwrite, args.restart)
+    why = check(args.out, args.overwrite, args.restart, lock=_rank() == 0)
     if why is None and args.restart:
         from .io import restart
         why = restart.early_error(args.out, args.scene, scene, data, restart.allowed(args.allow_change))

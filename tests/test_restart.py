@@ -46,10 +46,10 @@ def elastica(tmp_path_factory):
 @pytest.mark.parametrize("args, words", [
     # the --set of the first run forgotten: both named, with both values and the way back
     ([], ["n_increments 3 (now 10)", "size 0.25 (now 0.125)", "--set n_increments=3 --set size=0.25",
-          "--allow-change n_increments,size"]),
+          "--allow-change n_increments to go on with the new value (size cannot change at a restart)"]),
     (FIRST + ["--set", "lam=8"], ["lam 5 (now 8)", "--allow-change lam"]),
     (FIRST + ["--set", "E=2000"], ["E 1000 (now 2000)"]),
-    (FIRST + ["--set", "update=svk"], ["update 'sr' (now 'svk')"]),
+    (FIRST + ["--set", "update=svk"], ["update 'sr' (now 'svk'): restart with --set update=sr (update cannot"]),
     # allowed, but meaningless: a final load below the one reached, another mesh
     (FIRST + ["--set", "lam=2", "--allow-change", "lam"], ["lam = 2 is short of the load the run has reached (5)"]),
     (["--set", "n_increments=3", "--set", "size=0.5", "--allow-change", "size"], ["size cannot change at a restart"]),

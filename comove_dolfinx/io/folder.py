@@ -68,9 +68,12 @@ def _old_results(p: pathlib.Path) -> list[str]:
     return [f for f in RESULTS if (p / f).exists()] + [g.name for pat in RESULT_GLOBS for g in p.glob(pat)]
 
 
-def check(path, overwrite: bool = False, restart: bool = False) -> str | None:
+def check(path, overwrite: bool = False, restart: bool = False, lock: bool = True) -> str | None:
     """Why ``path`` cannot take a run (the message, naming the fix), or None; reads, never writes
-    (the standard library only: the command asks before it loads dolfinx)."""
+    (the standard library only: the command asks before it loads dolfinx). ``lock=False``: whether
+    another run holds the folder is not asked; the command's ranks other than 0 do so, since rank 0
+    of their own run may hold it already (it takes the lock before the other ranks join it), and
+    rank 0's answer is every rank's when the run takes the folder."""
     p = pathlib.Path(path)
     if p.exists() and not p.is_dir():
         return f"--out {p}: this is a file, not a folder: choose a folder"
@@ -81,7 +84,7 @@ def check(path, overwrite: bool = False, restart: bool = False) -> str | None:
         return f"--out {p}: cannot create the folder ({parent} is a file): choose another place"
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"--out {p}: {'the folder' if parent == p else parent} is not writable: choose another place"
-    pid = _holder(p / ".lock")               # (a folder still to be made has no lock and no results)
+    pid = _holder(p / ".lock") if lock else None     # (a folder still to be made has no lock and no results)
     if pid is not None:
         return _busy(p, pid)
     old = _old_results(p)

@@ -93,7 +93,10 @@ class Verdict:
 
 
 def _fmt(v) -> str:
-    return f"{v:g}" if isinstance(v, float) else repr(v) if isinstance(v, str) else str(v)
+    """A parameter's value as the message shows it: floats short where that is exact."""
+    if isinstance(v, float):
+        return f"{v:g}" if float(f"{v:g}") == v else repr(v)
+    return repr(v) if isinstance(v, str) else str(v)
 
 
 def _what(identity: dict) -> str:
@@ -142,8 +145,12 @@ def _compare_scene(verdict: Verdict, out, old: dict, new: dict, allow: set, scen
     refused = [k for k in differ if k not in allow]
     if refused:
         same = " ".join(f"--set {k}={differ[k][0]}" for k in refused)
-        verdict.error = (f"--restart: {out} was run with other parameters: {named}: restart with {same}, "
-                         f"or pass --allow-change {','.join(refused)} to go on with the new values")
+        free = [k for k in refused if scene.restart_change_error(k, differ[k][0], reached) is None]
+        fixed = [k for k in refused if k not in free]
+        verdict.error = (f"--restart: {out} was run with other parameters: {named}: restart with {same}"
+                         + (f", or pass --allow-change {','.join(free)} to go on with the new "
+                            f"value{'s' if len(free) > 1 else ''}" if free else "")
+                         + (f" ({', '.join(fixed)} cannot change at a restart)" if fixed else ""))
         return
     for k, (a, _) in differ.items():
         why = scene.restart_change_error(k, a, reached)

@@ -240,11 +240,11 @@ class Newton(LineSearches):
         return int(changed.sum())
 
     def _out_of_range(self, r0: float) -> tuple[str, int, str] | None:
-        """(cause, iterations, reason) of a first residual whose norm is not finite or is 0 while
-        its entries are not, or None. A norm that overflows (or underflows to 0) from finite entries
-        means forces beyond the range of double precision, which no smaller increment brings back
-        (``hopeless``); entries that are not finite are an iterate led astray (a predictor's),
-        which a smaller increment from the last state may cure."""
+        """(cause, iterations, reason) of a first residual whose norm overflows (or underflows to 0)
+        from finite entries that are not all 0: forces beyond the range of double precision, which
+        no smaller increment brings back (``hopeless``); else None. Entries that are not finite are
+        an iterate led astray (a predictor's): the iteration fails as it always did (a correction
+        that is not finite), and a retry or a smaller increment may cure it."""
         largest = self.b.norm(PETSc.NormType.NORM_INFINITY)
         if r0 == 0.0 and largest == 0.0:
             return None                        # in equilibrium as it stands
@@ -253,7 +253,7 @@ class Newton(LineSearches):
             return (failures.DIVERGED, 0, f"the residual's norm is {r0:g} for a largest entry of {largest:.3g}: "
                     "the forces are beyond the range of double precision's squares (1e-154 to 1e154); "
                     "state the problem in other units (E and the loads nearer 1)")
-        return failures.DIVERGED, 0, f"the residual is not finite (|R| = {r0})"
+        return None
 
     def _iterate(self) -> tuple[bool, int, str]:
         m, s = self.model, self.settings
