@@ -15,12 +15,35 @@ The public API (docs/api.md), imported on first use so that ``import comove_dolf
     results = cm.Job(body, items, [cm.Step(20)], probes=[cm.NodeDisplacement("tip", (10, 0))]).run()
 """
 
+import sys
+
 __version__ = "0.3.0"
 
-try:        # the PyPI wheel of dolfinx: its bootstrap loads mpi4py's MPI ahead of dolfinx's bindings
-    import dolfinx_solver  # noqa: F401
-except ModuleNotFoundError:
-    pass
+
+class _MPIFirst:
+    """The PyPI wheel of dolfinx needs its bootstrap (``import dolfinx_solver``: mpi4py's MPI loaded
+    ahead of dolfinx's and PETSc's bindings) before any of them. This import hook runs it at the
+    first import of mpi4py, petsc4py or dolfinx, not when the package is imported: ``import
+    comove_dolfinx`` stays light, and the ``comove`` command has its Ctrl-C handler installed
+    before anything heavy loads. Elsewhere (Debian's packages) the bootstrap is not installed and
+    the hook only removes itself."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name in ("mpi4py", "petsc4py", "dolfinx"):
+            sys.meta_path.remove(self)
+            try:
+                import dolfinx_solver  # noqa: F401
+            except ModuleNotFoundError as err:
+                if err.name != "dolfinx_solver":
+                    raise
+            except BaseException:           # its refusal, or Ctrl-C: the next import tries again
+                sys.meta_path.insert(0, self)
+                raise
+        return None
+
+
+if not {"mpi4py", "petsc4py", "dolfinx"} & set(sys.modules):
+    sys.meta_path.insert(0, _MPIFirst())
 
 
 _API = {

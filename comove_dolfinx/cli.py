@@ -194,16 +194,36 @@ def main(argv=None) -> int:
     try:
         return _main(argv, parsed)
     except KeyboardInterrupt as err:
-        return cs.interrupted(err, parsed[0] if parsed else None, _rank())
+        return _interrupted(err, parsed)
     except Exception as err:
         if not cs.SIGNALLED:             # a bug: its traceback
             raise
         # an import that a signal cut short fails so (numpy's C extension: ImportError)
-        return cs.interrupted(err, parsed[0] if parsed else None, _rank())
+        return _interrupted(err, parsed)
     finally:
         cs.restore(previous, ignore=argv is None)
         if argv is not None:
             sys.unraisablehook = hook
+
+
+def _interrupted(err: BaseException, parsed: list) -> int:
+    """The exit code of a command ended by a signal (its one line printed). On several ranks,
+    unless the ranks stopped together (a job's increments, parallel.Interrupts), another rank may
+    wait in a collective call that this one will never join, and a launcher that passes Ctrl-C
+    on to the ranks and waits for them (MPICH's) would wait for ever: the ranks are ended by
+    MPI_Abort, rank 0 at once (its run.json and line are written by then), the others a second
+    later, so that rank 0 says its line first unless it is the one that waits."""
+    from . import command_signals as cs
+    code = cs.interrupted(err, parsed[0] if parsed else None, _rank())
+    mpi = sys.modules.get("mpi4py.MPI")
+    if _ranks() > 1 and not getattr(err, "all_ranks", False) and mpi is not None and mpi.Is_initialized():
+        import time
+        sys.stderr.flush()
+        sys.stdout.flush()
+        if _rank() != 0:
+            time.sleep(1.0)
+        mpi.COMM_WORLD.Abort(code)
+    return code
 
 
 def _parser():
@@ -267,7 +287,7 @@ def _main(argv, parsed: list) -> int:
     _quiet_jit()
     from . import check_platform, command_signals
     command_signals.own_signals()
-    command_signals.import_gmsh()       # (its import sets Ctrl-C to the system's default)
+    command_signals.import_bindings()   # (gmsh's and dolfinx's imports cannot take a signal)
     check_platform()
     if args.command == "scenes":
         try:

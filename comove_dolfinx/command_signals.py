@@ -9,9 +9,11 @@ ones are recorded, so that the writers' closing and the output folder's last wor
 io/folder.py) are not cut short.
 
 Gmsh's Python module sets Ctrl-C to the system's default action when it is imported (the process
-would die without a word): the command imports it with the signals held back
-(:func:`signals_held`) and installs its handler again after. Under Open MPI's ``mpirun``, Ctrl-C
-reaches the ranks as SIGTERM, and ``mpirun`` itself ends with its own exit code (1).
+would die without a word), and dolfinx's compiled bindings abort the process if a signal's
+exception is raised while they initialise: the command imports both with the signals held back
+(:func:`signals_held`, :func:`import_bindings`) and installs its handler again after. Under Open
+MPI's ``mpirun``, Ctrl-C reaches the ranks as SIGTERM, and ``mpirun`` itself ends with its own
+exit code (1).
 
 Nothing here imports dolfinx, mpi4py or numpy.
 """
@@ -68,14 +70,19 @@ def signals_held():
         signal.pthread_sigmask(signal.SIG_UNBLOCK, set(SIGNALS))
 
 
-def import_gmsh() -> None:
-    """Import gmsh with the signals held back (the module docstring); if it is missing, the
-    platform check says so later."""
+def import_bindings() -> None:
+    """Import gmsh and dolfinx with the signals held back: gmsh's import sets Ctrl-C to the
+    system's default (the module docstring), and a KeyboardInterrupt raised while dolfinx's
+    compiled bindings initialise aborts the process (nanobind's module set-up, dolfinx 0.10 and
+    later: SIGSEGV or std::terminate). A signal that came meanwhile is handled once they are
+    loaded. If one is missing, the platform check says so later."""
+    import importlib
     with signals_held():
-        try:
-            import gmsh  # noqa: F401
-        except ImportError:
-            pass
+        for name in ("gmsh", "dolfinx"):
+            try:
+                importlib.import_module(name)
+            except ImportError:
+                pass
 
 
 def writer():
@@ -117,4 +124,8 @@ def interrupted(err: BaseException, args, rank: int) -> int:
         where = " while starting up, before any increment" if args is None or out else ""
     if rank == 0:
         print(f"comove: interrupted ({why}){where}", file=sys.stderr)
+    # CPython notes a KeyboardInterrupt that escapes code run by exec() (dataclasses build their
+    # methods so) as unhandled even when the command catches it later, and at exit kills the
+    # process with SIGINT instead of returning its code; a string run by exec() clears the note.
+    exec("None")
     return 143 if why == "SIGTERM" else 130

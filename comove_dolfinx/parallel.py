@@ -128,9 +128,13 @@ class Interrupts:
             return
         self.pending = 0
         handler = self._saved.get(signum, signal.getsignal(signum))
-        if not callable(handler):
-            raise KeyboardInterrupt(signal.Signals(signum).name)
-        handler(signum, None)
+        try:
+            if not callable(handler):
+                raise KeyboardInterrupt(signal.Signals(signum).name)
+            handler(signum, None)
+        except KeyboardInterrupt as err:
+            err.all_ranks = True      # every rank raises it here (cli.py: no rank is left waiting)
+            raise
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         try:

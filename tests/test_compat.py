@@ -39,3 +39,17 @@ def test_the_version_check_names_the_tested_levels(monkeypatch):
         with pytest.raises(SystemExit) as err:
             compat.check_version()
         assert all(v in str(err.value) for v in ("0.5", "0.9", "0.11", f"found {level}.0")), str(err.value)
+
+
+def test_importing_the_package_loads_nothing_heavy():
+    """``import comove_dolfinx`` loads none of MPI, PETSc, dolfinx, gmsh or numpy (the command
+    takes Ctrl-C before they load, and a script pays for them only when it uses the API); the
+    first use of the API then loads them in the order the PyPI wheel needs (MPI first)."""
+    import launch
+    code = ("import sys, comove_dolfinx as cm\n"
+            "heavy = ('mpi4py', 'petsc4py', 'dolfinx', 'gmsh', 'numpy', 'ufl')\n"
+            "assert not [m for m in heavy if m in sys.modules], [m for m in heavy if m in sys.modules]\n"
+            "mesh = cm.rectangle(1.0, 0.5, 0.5)\n"
+            "assert mesh.mesh.topology.index_map(2).size_global > 0\n")
+    proc = launch.run(["-c", code], timeout=300)
+    assert proc.returncode == 0, proc.stderr
