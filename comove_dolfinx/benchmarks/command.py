@@ -1,10 +1,10 @@
 """The command line of the benchmarks: ``python -m comove_dolfinx.benchmarks STUDY [options]``.
 
-STUDY is one of floor, parts, solvers, scale, slopes, krylov (the modules of this package say what each
+STUDY is one of floor, parts, solvers, scale, slopes, krylov, solid (the modules of this package say what each
 measures). Options: ``--out DIR`` (results/cost), ``--repeats N``, ``--increments N``, ``--sizes``
-(comma-separated mesh sizes of the ring), ``--solvers`` (comma-separated configurations of
+(comma-separated mesh sizes of the ring; solid: of the bent block), ``--solvers`` (comma-separated configurations of
 :data:`~comove_dolfinx.benchmarks.linear_solvers.SOLVERS`; for krylov the names of
-``NewtonSettings.linear_solver``), ``--scenes`` (scale; krylov: one scene) and
+``NewtonSettings.linear_solver``, also for solid), ``--scenes`` (scale; krylov: one scene) and
 ``--set key=value`` (repeatable: a parameter of the ring scene for floor and slopes). A bad option or
 scene parameter is a one-line usage error before any run.
 """
@@ -17,7 +17,7 @@ import pathlib
 from ..presets import SceneError, get_scene
 
 PROG = "python -m comove_dolfinx.benchmarks"
-STUDIES = ("floor", "parts", "solvers", "scale", "slopes", "krylov")
+STUDIES = ("floor", "parts", "solvers", "scale", "slopes", "krylov", "solid")
 
 
 def _parser(prog: str) -> argparse.ArgumentParser:
@@ -72,6 +72,9 @@ def _run(a: argparse.Namespace, out: pathlib.Path) -> None:
     elif a.study == "solvers":
         from .linear_solvers import solvers
         solvers(out, names=a.solvers.split(",") if a.solvers else None, **kw)
+    elif a.study == "solid":
+        from .solid3d import NAMES, solid
+        solid(out, names=tuple(a.solvers.split(",")) if a.solvers else NAMES, **kw)
     elif a.study == "krylov":
         from .multigrid import NAMES, krylov
         names = tuple(a.solvers.split(",")) if a.solvers else NAMES

@@ -80,6 +80,12 @@ def short_run(name: str, size: float, increments: int, options: dict | None = No
                                    monitor=monitor, linear_solver=linear_solver)
     steps = dataclasses.replace(scene.steps()[0].settings(), n_increments=increments,
                                 t_end=increments / scene.n_increments)
+    return timed_run(model, settings, steps, count, between)
+
+
+def timed_run(model: Model, settings, steps, count: bool = False, between=None) -> dict:
+    """:func:`short_run`'s figures of a finalized ``model`` run with the Newton ``settings`` over
+    the increments ``steps`` (a StepSettings)."""
     timer = Timer(time.process_time)
     newton = Newton(model, settings, timer)
     calls = {"residual": 0}

@@ -36,7 +36,8 @@ class Body:
         "polar", "svk", "neo_hooke" (docs/theory.md section 3), or "small_strain" (linear
         kinematics, section 3.5). Plastic bodies need sr_log, sr, hughes_winget or small_strain.
     degree : int
-        Lagrange degree of the displacement, 1 or 2 (P1 locks in bending).
+        Lagrange degree of the displacement, 1 or 2 (P1 locks in bending, and in plastic flow
+        except in plane stress: docs/verification.md, the flat punch).
     thickness : float
         Out-of-plane thickness of plane models (ignored in 3D).
     quadrature_degree : int, optional

@@ -1,0 +1,152 @@
+"""Prandtl's flat punch: volumetric locking in plastic flow (plane strain and a 3D slab).
+
+A smooth rigid flat punch of half-width b = 1 is pressed into a perfectly plastic half-space (J2,
+E = 1000, nu = 0.3, shear yield stress k = 1, i.e. sigma0 = sqrt(3)); plane strain, small strains
+(``update="small_strain"``: the classical problem). The limit pressure is (2 + pi) k [Prandtl 1920;
+Hill 1950, ch. VIII]. The half model [0, 5] x [-5, 0] (5 half-widths wide and deep: the plastic zone
+of the mechanism reaches 2 b sideways and about 1.4 b deep) has u_x = 0 on its axis and right side and
+u = 0 at its base; the punch is a prescribed settlement u_y = -0.05 (25 increments; the pressure
+levels off after about 0.02) of the facets under it, u_x free (a smooth punch). The mesh is n x n
+squares cut into triangles (``crossed``: four per square; ``right``: two), graded towards the
+punch's edge; the slab is the same squares, one layer of cubes (six tetrahedra each), held by
+u_z = 0 on both faces.
+
+Plastic flow keeps the volume, and an element whose displacements cannot follow such a flow locks:
+the limit pressure comes out too high and falls slowly as the mesh is refined. Measured here:
+
+* P2 triangles (the default element) reach the limit pressure as the mesh is refined, the error
+  falling about as h^1.7; checked at the finest mesh (n = 32, crossed) within 1 %.
+* P2 tetrahedra (the slab, n = 16) are within 3.5 %, as P2 triangles with one diagonal are
+  (the same vertices): no locking in 3D either.
+* P1 triangles (and tetrahedra) overshoot by 10-40 % on these meshes and converge about as h: they
+  lock. A job with P1 displacements that yields in plane strain, axisymmetry or 3D says so
+  (guards.py) and advises degree=2.
+
+With ``small`` the meshes are n = 8 and 16 (P2 checked at n = 16 within 2.5 %), the slab n = 8
+(within 10 %).
+"""
+from __future__ import annotations
+
+import math
+import pathlib
+
+import numpy as np
+from mpi4py import MPI
+
+from . import Check
+from .common import run_job, save_figure
+
+NAME = "punch"
+TITLE = "Prandtl's flat punch"
+SOURCE = "Prandtl 1920; Hill 1950, ch. VIII"
+
+PRANDTL = 2.0 + math.pi          # the limit pressure over the shear yield stress k
+WIDTH = DEPTH = 5.0              # the half model; the punch's half-width is 1
+SETTLEMENT, INCREMENTS = 0.05, 25
+
+
+def _graded(s, power: float = 1.8):
+    """[0, 1] onto [0, 1], denser towards 0."""
+    return np.clip(s, 0.0, 1.0) ** power
+
+
+def mesh(n: int, diagonal: str = "crossed", slab: bool = False, comm=MPI.COMM_WORLD):
+    """The half model in n x n squares graded towards the punch's edge (1, 0), a MeshData with the
+    facets 'punch' (y = 0, x <= 1), 'top' (the rest of y = 0), 'sym' (x = 0), 'bottom' and
+    'right'; with ``slab`` a layer of n x n x 1 cubes of tetrahedra, 2 WIDTH / n thick, whose faces
+    z = const are 'faces'."""
+    import dolfinx.mesh
+
+    from ..geometry import from_dolfinx
+    lower, upper = np.array([0.0, -DEPTH]), np.array([WIDTH, 0.0])
+    thick = 2.0 * WIDTH / n
+    if slab:
+        msh = dolfinx.mesh.create_box(comm, [np.append(lower, 0.0), np.append(upper, thick)], [n, n, 1],
+                                      dolfinx.mesh.CellType.tetrahedron)
+    else:
+        msh = dolfinx.mesh.create_rectangle(comm, [lower, upper], [n, n], dolfinx.mesh.CellType.triangle,
+                                            diagonal=getattr(dolfinx.mesh.DiagonalType, diagonal))
+    x = msh.geometry.x
+    xs, ys, half = x[:, 0].copy(), x[:, 1].copy(), WIDTH / 2
+    x[:, 0] = np.where(xs <= half, 1.0 - _graded((half - xs) / half),
+                       1.0 + (WIDTH - 1.0) * _graded((xs - half) / half))
+    x[:, 1] = -DEPTH * _graded(-ys / DEPTH)
+    groups = {"punch": lambda p: np.isclose(p[1], 0.0) & (p[0] <= 1.0 + 1e-9),
+              "top": lambda p: np.isclose(p[1], 0.0) & (p[0] >= 1.0 - 1e-9),
+              "sym": lambda p: np.isclose(p[0], 0.0),
+              "bottom": lambda p: np.isclose(p[1], -DEPTH),
+              "right": lambda p: np.isclose(p[0], WIDTH)}
+    if slab:
+        groups["faces"] = lambda p: np.isclose(p[2], 0.0) | np.isclose(p[2], thick)
+    fdim = msh.topology.dim - 1
+    facets, values = [], []
+    for tag, where in enumerate(groups.values(), start=1):
+        found = dolfinx.mesh.locate_entities_boundary(msh, fdim, where)
+        facets.append(found)
+        values.append(np.full(found.size, tag, dtype=np.int32))
+    facets, values = np.concatenate(facets), np.concatenate(values)
+    order = np.argsort(facets, kind="stable")
+    tags = dolfinx.mesh.meshtags(msh, fdim, facets[order], values[order])
+    return from_dolfinx(msh, tags, {name: tag for tag, name in enumerate(groups, start=1)})
+
+
+def press(n: int, degree: int, diagonal: str = "crossed", slab: bool = False, comm=MPI.COMM_WORLD):
+    """The punch pressed: (settlements, pressures / k, the job's Results, Newton iterations, CPU s)."""
+    import comove_dolfinx as cm
+    body = cm.Body(mesh(n, diagonal, slab, comm), "solid" if slab else "plane_strain",
+                   cm.J2(1000.0, 0.3, cm.Hardening.perfect(math.sqrt(3.0))), degree=degree,
+                   update="small_strain")
+    items = [cm.Fixed("sym", 0), cm.Fixed("bottom"), cm.Fixed("right", 0),
+             cm.Displacement("punch", -SETTLEMENT, component=1)]
+    if slab:
+        items.append(cm.Fixed("faces", 2))
+    probe = cm.Reaction("punch", "P", dim=3 if slab else 2)
+    res, its, cpu = run_job(cm.Job(body, items, [cm.Step(INCREMENTS)], probes=[probe], writers=[]), comm)
+    thickness = 2.0 * WIDTH / n if slab else 1.0
+    return SETTLEMENT * res["load"], np.abs(res["P_fy"]) / thickness, res, its, cpu
+
+
+def run(out: pathlib.Path, small: bool = False) -> list[Check]:
+    comm = MPI.COMM_WORLD
+    out = pathlib.Path(out)
+    sizes = (8, 16) if small else (8, 16, 32)
+    curves, checks = {}, []
+    for degree in (1, 2):
+        for n in sizes:
+            curves[f"P{degree} triangles, n = {n}"] = press(n, degree, comm=comm)
+    n_slab = 8 if small else 16
+    curves[f"P2 tetrahedra (slab), n = {n_slab}"] = press(n_slab, 2, slab=True, comm=comm)
+    finest = curves[f"P2 triangles, n = {sizes[-1]}"]
+    checks.append(Check(TITLE, SOURCE, f"P2 triangles, n = {sizes[-1]} ({finest[2].dofs} dofs): limit "
+                        "pressure / k against 2 + pi", PRANDTL, finest[1][-1], 0.025 if small else 0.01,
+                        finest[3], finest[4]))
+    slab = curves[f"P2 tetrahedra (slab), n = {n_slab}"]
+    checks.append(Check(TITLE, SOURCE, f"P2 tetrahedra, slab n = {n_slab} ({slab[2].dofs} dofs): limit "
+                        "pressure / k against 2 + pi", PRANDTL, slab[1][-1], 0.10 if small else 0.035,
+                        slab[3], slab[4]))
+    if comm.rank == 0:
+        from ..io.csv_tables import write_table
+        write_table(out / f"{NAME}_limits.csv",
+                    [{"mesh": label, "dofs": res.dofs, "limit_pressure/k": p[-1],
+                      "error": p[-1] / PRANDTL - 1.0, "newton_its": its, "cpu_s": cpu}
+                     for label, (_, p, res, its, cpu) in curves.items()])
+    _plot(out, curves, comm)
+    return checks
+
+
+def _plot(out, curves: dict, comm) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    for k, (label, (d, p, *_)) in enumerate(curves.items()):
+        style = "--" if label.startswith("P1") else ("-" if "triangles" in label else ":")
+        ax.plot(np.append(0.0, d), np.append(0.0, p), style, lw=1.4, label=label)
+    ax.axhline(PRANDTL, color="k", lw=1, label="2 + pi (Prandtl)")
+    ax.set_xlabel("settlement of the punch / its half-width")
+    ax.set_ylabel("mean pressure / k")
+    ax.set_ylim(0, 1.5 * PRANDTL)
+    ax.set_title("smooth flat punch on a perfectly plastic half-space (plane strain)", fontsize=9)
+    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    fig.tight_layout()
+    save_figure(fig, out, NAME, comm)
