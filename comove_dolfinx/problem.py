@@ -9,7 +9,7 @@
     size = 0.22
 
     [body]
-    kind = "plane_strain"        # plane_stress, plane_strain, axisymmetric
+    kind = "plane_strain"        # plane_stress, plane_strain, axisymmetric, solid (3D)
     update = "sr"
     degree = 2
     material = { law = "j2", E = 1.89e6, nu = 0.3, hardening = [[0, 2800], [0.5, 5300]] }
@@ -55,8 +55,8 @@ import tomllib
 from .checks import mesh_size_error, newton_error
 from .choices import PLASTIC_UPDATES, first_increment_error
 from .mechanics.material_data import Elastic, Hardening, MaterialError
-from .problem_schema import (BUILDERS, ITEMS, OBSTACLES, OPTIONAL, PROBES, REQUIRED, SECTIONS,
-                             ProblemError, _check)
+from .problem_schema import (BUILDER_OPTIONS, BUILDERS, BUILDERS_3D, ITEMS, OBSTACLES, OPTIONAL, PROBES,
+                             REQUIRED, SECTIONS, ProblemError, _check)
 
 
 def _load(path: pathlib.Path) -> dict:
@@ -98,12 +98,13 @@ def _mesh(path: pathlib.Path, mesh) -> None:
     if not isinstance(b, str) or b not in BUILDERS:
         raise ProblemError(f"{where} builder = {b!r}: choose one of {', '.join(BUILDERS)} or "
                            "give file = \"part.msh\"")
-    _check(where, mesh, {"builder": str, "order": int, **{k: float for k in BUILDERS[b]}}, required=BUILDERS[b])
-    for k in BUILDERS[b]:
-        if mesh[k] <= 0:
+    sizes = BUILDERS[b] + BUILDER_OPTIONS.get(b, ())
+    _check(where, mesh, {"builder": str, "order": int, **{k: float for k in sizes}}, required=BUILDERS[b])
+    for k in sizes:
+        if k in mesh and mesh[k] <= 0:
             raise ProblemError(f"{where} {k} = {mesh[k]}: give a number > 0")
     pair = {"annulus_sector": ("r_in", "r_out"), "plate_section": ("z_support", "t"),
-            "quarter_disc": ("size_contact", "size")}.get(b)
+            "quarter_disc": ("size_contact", "size"), "tube_sector": ("r_in", "r_out")}.get(b)
     if pair:
         (a, lo), (c, hi) = ((k, mesh[k]) for k in pair)
         strict = b != "quarter_disc"
@@ -137,6 +138,29 @@ def _body(path: pathlib.Path, body) -> None:
     if law != "elastic" and update not in PLASTIC_UPDATES:
         raise ProblemError(f"{where} update = {update!r} cannot carry plasticity: choose one of "
                            f"{', '.join(PLASTIC_UPDATES)}")
+
+
+def _dimension(path: pathlib.Path, data: dict) -> None:
+    """The body's dimension (3 for kind = "solid", else 2) in its mesh builder, every vector of the
+    items, obstacles and probes, and every component."""
+    solid = data["body"]["kind"] == "solid"
+    dim = 3 if solid else 2
+    builder = data["mesh"].get("builder")
+    if builder is not None and (builder in BUILDERS_3D) != solid:
+        want = f"a 3D builder ({', '.join(BUILDERS_3D)})" if solid else "a 2D builder, or kind = \"solid\""
+        raise ProblemError(f"{path}: [mesh] builder = {builder!r} for a body of kind = "
+                           f"{data['body']['kind']!r}: give {want}")
+    tables = [(f"[[items]] {k} ({t['type']})", t, ITEMS[t["type"]]) for k, t in enumerate(data["items"], 1)]
+    tables += [(f"[[items]] {k} ({t['type']}) obstacle", t["obstacle"], OBSTACLES[t["obstacle"]["type"]])
+               for k, t in enumerate(data["items"], 1) if t["type"] == "contact"]
+    tables += [(f"[[probes]] {k} ({t['type']})", t, PROBES[t["type"]]) for k, t in enumerate(data.get("probes", []), 1)]
+    for where, table, spec in tables:
+        for key, value in table.items():
+            if spec.get(key) in ("vector", "vector|number") and isinstance(value, list) and len(value) != dim:
+                raise ProblemError(f"{path}: {where}: {key} = {value!r}: give {dim} numbers (the body is "
+                                   f"{'3D' if solid else '2D'})")
+            if key == "component" and value >= dim:
+                raise ProblemError(f"{path}: {where}: component = {value}: the body is 2D, give 0 (x) or 1 (y)")
 
 
 def _items(path: pathlib.Path, items: list) -> dict:
@@ -230,6 +254,7 @@ def read(path) -> dict:
     if why is not None:
         raise ProblemError(f"{path}: [newton] {why}")
     _probes(path, _need(path, data, "probes"), data["items"], names)
+    _dimension(path, data)
     return data
 
 
@@ -259,7 +284,7 @@ def build(data: dict, comm, writers=()):
                   name=st.get("name", ""), release=[named[k] for k in st.get("release", [])],
                   first=st.get("first", 1.0), retry=st.get("retry", Step.retry))
              for st in data["steps"]]
-    plist = [_probe(spec, named) for spec in data.get("probes", [])]
+    plist = [_probe(spec, named, 3 if b["kind"] == "solid" else 2) for spec in data.get("probes", [])]
     newton = NewtonSettings(**data.get("newton", {}))
     return Job(body, list(named.values()), steps, plist, writers, newton=newton)
 
@@ -282,8 +307,8 @@ def _item(spec: dict):
     return c.Contact(s.pop("boundary"), obstacle, **s)
 
 
-def _probe(s: dict, named: dict):
-    """The probe of a checked [[probes]] table (``named``: the items by name)."""
+def _probe(s: dict, named: dict, dim: int = 2):
+    """The probe of a checked [[probes]] table (``named``: the items by name; ``dim``: the body's)."""
     from . import probes
     kind, scale = s["type"], s.get("scale", 1.0)
     if kind == "node":
@@ -295,5 +320,5 @@ def _probe(s: dict, named: dict):
     if kind == "contact_peak":
         return probes.ContactPeak(named[s["item"]], s.get("column", "peak_pressure"), scale)
     if kind == "reaction":
-        return probes.Reaction(s["boundary"], s.get("name"))
+        return probes.Reaction(s["boundary"], s.get("name"), dim=dim)
     return probes.MaxPlasticStrain()

@@ -15,7 +15,14 @@ class ProblemError(ValueError):
 
 BUILDERS = {"rectangle": ("L", "H", "size"), "annulus_sector": ("r_in", "r_out", "size"),
             "plate_section": ("R", "t", "z_support", "size"), "quarter_disc": ("R", "size", "size_contact",
-                                                                            "contact_zone")}
+                                                                            "contact_zone"),
+            "box": ("Lx", "Ly", "Lz", "size"), "tube_sector": ("r_in", "r_out", "length", "size"),
+            "sphere_octant": ("R", "size")}
+#: the builders' optional sizes (the 3D builders' refinement near the contact, the tube's angle)
+BUILDER_OPTIONS = {"tube_sector": ("angle", "size_contact", "contact_zone", "growth"),
+                   "sphere_octant": ("size_contact", "contact_zone", "growth")}
+#: the builders of 3D meshes (for the body kind "solid")
+BUILDERS_3D = ("box", "tube_sector", "sphere_octant")
 ITEMS = {"fixed": {"boundary": str, "component": int},
          "displacement": {"boundary": str, "value": "vector|number", "component": int},
          "pressure": {"boundary": str, "p": float},
@@ -45,20 +52,11 @@ def _positive(key, value):
     return number(key, value, gt=0)
 
 
-def _kind(key, value):
-    """A body's kind: one of MODELS, and not (yet) the 3D model, which problem files do not describe."""
-    why = choice(key, value, MODELS)
-    if why is None and value == "solid":
-        return (f"{key} = 'solid': problem files describe 2D bodies; build a 3D body from Python "
-                "(cm.Body(cm.box(...), 'solid', ...))")
-    return why
-
-
 #: the values a key may take, wherever it stands (its type is checked first): the message or None
 RANGES = {
-    "kind": _kind, "update": lambda k, v: choice(k, v, UPDATES),
+    "kind": lambda k, v: choice(k, v, MODELS), "update": lambda k, v: choice(k, v, UPDATES),
     "degree": lambda k, v: choice(k, v, (1, 2)), "order": lambda k, v: choice(k, v, (1, 2)),
-    "law": lambda k, v: choice(k, v, LAWS), "component": lambda k, v: choice(k, v, (0, 1), " (0: x, 1: y)"),
+    "law": lambda k, v: choice(k, v, LAWS), "component": lambda k, v: choice(k, v, (0, 1, 2), " (0: x, 1: y, 2: z in 3D)"),
     "thickness": _positive, "gamma0": _positive, "gamma0_t": _positive, "radius": _positive,
     "spacing": _positive, "relag_tol": _positive,
     "mu": lambda k, v: number(k, v, ge=0, what=" (the friction coefficient)"),
@@ -71,8 +69,8 @@ RANGES = {
     **{k: (lambda k, v: text(k, v)) for k in ("name", "boundary", "column", "item", "curve", "file")},
 }
 WANT = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false", dict: "a table",
-        list: "a list of item names", "vector": "two finite numbers [x, y]", "points": "a list of [x, y] points",
-        "vector|number": "a finite number or [x, y]", "names": "a list of names",
+        list: "a list of item names", "vector": "finite numbers [x, y] ([x, y, z] in 3D)", "points": "a list of [x, y] points",
+        "vector|number": "a finite number or [x, y] ([x, y, z] in 3D)", "names": "a list of names",
         "table": "rows [strain, stress]: [[0, sigma_y], ...]"}
 
 
@@ -91,7 +89,7 @@ def _typed(kind, value) -> bool:
     if kind in (list, "names"):
         return isinstance(value, list) and all(isinstance(v, str) for v in value)
     if kind in ("vector", "vector|number"):
-        return (isinstance(value, list) and len(value) == 2 and all(_real(v) for v in value)) or (
+        return (isinstance(value, list) and len(value) in (2, 3) and all(_real(v) for v in value)) or (
             kind == "vector|number" and _real(value))
     return isinstance(value, list) and len(value) >= (2 if kind == "points" else 1) and all(   # points, table
         isinstance(p, list) and len(p) == 2 and all(_real(v) for v in p) for p in value)
