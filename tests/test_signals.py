@@ -40,10 +40,14 @@ def _interrupt(out, delay, n=1, after_first_line=False):
 
 
 def _before_the_command(stderr) -> bool:
-    """Whether the signal came while the interpreter itself was starting (its site imports, before
-    any code of comove_dolfinx ran), where Python's own handling is all there is: a traceback with no
-    frame of the package (one rank), or nothing at all (ranks that mpirun's SIGTERM ended first)."""
-    return "comove_dolfinx" not in stderr and not stderr.startswith("comove:")
+    """Whether the signal came before the command had installed its handler (the interpreter's
+    start, its site imports, the first lines of the command), where Python's own handling is all
+    there is: a traceback of a KeyboardInterrupt that Python's default handler raised (the
+    command's handler, ``on_signal``, is not in it), or nothing at all (ranks that mpirun's SIGTERM
+    ended first)."""
+    if stderr.startswith("comove:"):
+        return False
+    return not stderr.strip() or (stderr.rstrip().endswith("KeyboardInterrupt") and "in on_signal" not in stderr)
 
 
 def _status(out):
