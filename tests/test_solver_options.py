@@ -333,3 +333,47 @@ def test_a_job_warns_once_when_mumps_needed_more_workspace(capsys):
     out = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert out.count("warning: linear solver:") == 1
+
+
+def _fill_tridiagonal(A, middle: float) -> None:
+    """The 1D Laplacian's entries (2, -1) into ``A``, its middle diagonal entry ``middle``."""
+    n = A.getSize()[0]
+    A.zeroEntries()
+    lo, hi = A.getOwnershipRange()
+    for i in range(lo, hi):
+        cols = [j for j in (i - 1, i, i + 1) if 0 <= j < n]
+        A.setValues(i, cols, [middle if i == j == n // 2 else (2.0 if i == j else -1.0) for j in cols])
+    A.assemble()
+
+
+@pytest.mark.mpi
+def test_a_failed_solve_leaves_the_solver_usable():
+    """Tangents with a NaN (iterates that left the stress update's range) fail their
+    factorisation, and a solve after such a failure failed in MUMPS's solve phase with PETSc's
+    error; then a sound tangent in the same matrix (a smaller increment) is solved right: no
+    failure is left behind in the preconditioner (before, PETSc refused every later solve,
+    "Cannot embed PCPreSolve() more than twice", so that each smaller increment failed for the first
+    one's reason)."""
+    from petsc4py import PETSc
+
+    from comove_dolfinx.solver.linear import solve, with_defaults
+    comm = MPI.COMM_WORLD
+    options = with_defaults({})
+    ksp = make_ksp(comm, None, options)
+    A = PETSc.Mat().createAIJ([12, 12], comm=comm, nnz=(3, 2))
+    ksp.setOperators(A)
+    b, x = A.createVecs()
+    b.set(1.0)
+    errors = []
+    for _ in range(3):
+        _fill_tridiagonal(A, float("nan"))
+        failure, _ = solve(ksp, options, b, x, comm)
+        errors.append(failure)
+    assert ksp.getConvergedReason() < 0                      # the NaN's factorisation failed
+    _fill_tridiagonal(A, 2.0)
+    failure, _ = solve(ksp, options, b, x, comm)
+    assert failure is None and ksp.getConvergedReason() > 0, failure
+    r = b.duplicate()
+    A.mult(x, r)
+    r.axpy(-1.0, b)
+    assert r.norm() < 1e-12 * b.norm()

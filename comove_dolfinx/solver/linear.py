@@ -108,8 +108,16 @@ def make_ksp(comm, A: PETSc.Mat | None, options: dict) -> PETSc.KSP:
     ksp.setOptionsPrefix(PREFIX)
     if A is not None:
         ksp.setOperators(A)
+    configure(ksp, options)
+    return ksp
+
+
+def configure(ksp: PETSc.KSP, options: dict) -> None:
+    """The KSP's type and its preconditioner's: the defaults, then the options of the database
+    and ``options`` (SolverOptionError if PETSc refuses one)."""
     ksp.setType(DEFAULTS["ksp_type"])
     pc = ksp.getPC()
+    pc.setOptionsPrefix(ksp.getOptionsPrefix())
     pc.setType(DEFAULTS["pc_type"])
     pc.setFactorSolverType(DEFAULTS["pc_factor_mat_solver_type"])
     try:
@@ -117,7 +125,6 @@ def make_ksp(comm, A: PETSc.Mat | None, options: dict) -> PETSc.KSP:
             ksp.setFromOptions()
     except PETSc.Error as err:
         raise refused(options, err) from None
-    return ksp
 
 
 #: the factorisations (PCFactorSetMatSolverType) that take PETSc's blocked matrix BAIJ in an LU
@@ -210,6 +217,8 @@ def solve(ksp: PETSc.KSP, options: dict, rhs: PETSc.Vec, x: PETSc.Vec, comm) -> 
     (None, or PETSc's error if any rank raised one: the same on every rank; the workspaces raised
     to, per cent). A negative KSP reason without an error is the caller's to read."""
     grown = []
+    if ksp.getConvergedReason() < 0:                 # the last solve failed (read by the caller)
+        _fresh_pc(ksp, options)
     while True:
         err = None
         try:
@@ -218,12 +227,27 @@ def solve(ksp: PETSc.KSP, options: dict, rhs: PETSc.Vec, x: PETSc.Vec, comm) -> 
         except PETSc.Error as e:
             err = PETScError(f"error code {e.ierr}: {petsc_reason(e)}")      # (one line)
         failure = first_failure(comm, err)
+        if failure is not None:
+            _fresh_pc(ksp, options)                  # on every rank, wherever PETSc raised
         if failure is not None or ksp.getConvergedReason() >= 0:
             return failure, grown
         pct = grow_workspace(ksp, options)
         if pct is None:
             return None, grown
         grown.append(pct)
+
+
+def _fresh_pc(ksp: PETSc.KSP, options: dict) -> None:
+    """``ksp`` set up again from ``options``, as :func:`make_ksp` set it up, with its operators,
+    after a failed solve: a factorisation that failed (a tangent with NaN) is not redone for the
+    next matrix, whose solve then fails in MUMPS's solve phase (INFOG(1) = -3), and a solve that
+    PETSc cut short with an error leaves its preconditioner counting a pre-solve that never ended,
+    so that from the second one on PETSc refuses every solve ("Cannot embed PCPreSolve() more than
+    twice"): each smaller increment would fail for the first one's reason. Collective."""
+    operators = ksp.getOperators()
+    ksp.setPC(PETSc.PC().create(ksp.getComm()))
+    configure(ksp, options)
+    ksp.setOperators(*operators)
 
 
 def factor_error(ksp: PETSc.KSP) -> str:
