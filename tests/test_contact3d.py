@@ -20,7 +20,7 @@ from mpi4py import MPI
 
 import comove_dolfinx as cm
 from comove_dolfinx import compat
-from comove_dolfinx.contact import Contact, ContactError, Cylinder, Plane, Sphere
+from comove_dolfinx.contact import Contact, ContactError, Cylinder, Plane, Sphere, hertz3d
 from comove_dolfinx.loads import Displacement, Pressure, Traction
 from comove_dolfinx.mechanics.body import Body
 from comove_dolfinx.mechanics.model import Model
@@ -28,8 +28,7 @@ from comove_dolfinx.probes import ProbeError
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 from comove_dolfinx.taylor import taylor_test
 
-R, E_S, NU_S, D = 50.0, 20000.0, 0.3, 2.0       # Hertz's sphere
-ES = E_S / (1.0 - NU_S ** 2)
+R, E_S, NU_S, D = hertz3d.R, hertz3d.E, hertz3d.NU, hertz3d.D       # Hertz's sphere
 
 
 @pytest.fixture(scope="module")
@@ -38,21 +37,6 @@ def cache(tmp_path_factory):
 
 
 # -- Hertz -------------------------------------------------------------------------------------------
-def _hertz_octant(cache, size_contact=2.0):
-    """(P of the whole sphere, a from the contact area, p0, dofs) of the octant pressed by D."""
-    md = cm.sphere_octant(R, 10.0, order=2, size_contact=size_contact, contact_zone=15.0, growth=0.3,
-                          cache_dir=cache)
-    body = cm.Body(md, "solid", cm.Elastic(E_S, NU_S), update="sr_log")
-    c = cm.Contact("outer", cm.Plane((0.0, 0.0, R), (0.0, 0.0, -1.0)), method="nitsche", gamma0=10.0)
-    items = [cm.Fixed("xsym", component=0), cm.Fixed("ysym", component=1),
-             cm.Displacement("zsym", D, component=2), c]
-    probes = [cm.ContactForce(c, "P", component=2, scale=-4.0), cm.ContactArea(c, "A", scale=4.0),
-              cm.ContactPeak(c, "p0")]
-    res = cm.Job(body, items, [cm.Step(4)], probes).run()
-    assert res.completed, res.message
-    return res.last["P"], np.sqrt(res.last["A"] / np.pi), res.last["p0"], res.dofs
-
-
 def _hertz_axisymmetric(cache):
     """P of the same hemisphere, axisymmetric (20 elements across Hertz's a)."""
     md = cm.quarter_disc(R, 5.0, 0.5, 15.0, cache_dir=cache)
@@ -69,15 +53,14 @@ def test_hertz_sphere_octant_on_a_flat(cache):
     """a and p0 against Hertz at the computed force within 3 % on a coarse mesh (5 elements across
     a: the area counts an edge band of facets by their quadrature points, the peak is a nodal
     value), P within 1 % of the axisymmetric model's. The docs' finer mesh (10 across a) reaches
-    -0.9 % and +1.0 % (docs/verification.md, "hertz_sphere_3d")."""
-    P, a, p0, _ = _hertz_octant(cache)
-    a_h = (3.0 * P * R / (4.0 * ES)) ** (1.0 / 3.0)
-    p0_h = 3.0 * P / (2.0 * np.pi * a_h ** 2)
-    assert a == pytest.approx(a_h, rel=0.03)
-    assert p0 == pytest.approx(p0_h, rel=0.03)
-    assert P == pytest.approx(_hertz_axisymmetric(cache), rel=0.01)
+    -0.9 % and +1.0 % (docs/api.md, "Contact of 3D bodies")."""
+    run = hertz3d.octant_run(2.0, cache_dir=cache)
+    hertz = hertz3d.at_force(run["P"])
+    assert run["a"] == pytest.approx(hertz["a"], rel=0.03)
+    assert run["p0"] == pytest.approx(hertz["p0"], rel=0.03)
+    assert run["P"] == pytest.approx(_hertz_axisymmetric(cache), rel=0.01)
     # the closed form at the approach, for scale: the finite sphere is stiffer by about 11 %
-    assert 1.05 < P / (4.0 / 3.0 * ES * np.sqrt(R) * D ** 1.5) < 1.15
+    assert 1.05 < run["P"] / hertz3d.closed_form()["P"] < 1.15
 
 
 # -- Coulomb: a block sliding diagonally -------------------------------------------------------------

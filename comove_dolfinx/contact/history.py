@@ -10,7 +10,7 @@ the lag state of friction and the penalty friction's stick part.
   evaluated from the converged state u_lag was solved from (``base``, a FacetBase), not from the
   one after it;
 * ``e_n``: the penalty friction's stick part (a length along t_o: the elastic tangential slip; in 3D
-  a tangential vector), a boundary field, the lumped projection of the new stick part at each converged increment.
+  a tangential vector, linear on the facets), a boundary field, the lumped projection of the new stick part at each converged increment.
 """
 from __future__ import annotations
 
@@ -37,9 +37,10 @@ class ContactHistory:
         self.u_lag.x.array[:] = ctx.u_n.x.array
         self.e_n = None
         if stick:        # a length along t_o in 2D, a tangential vector in 3D
-            shape = (3,) if msh.topology.dim == 3 else ()
-            self.e_n = fem.Function(compat.function_space(msh, "Lagrange", ctx.degree, shape),
-                                    name="stick_slip")
+            # in 3D linear: the quadratic vertex functions of a triangular facet integrate to zero,
+            # so a lumped projection onto them does not exist
+            shape, degree = ((3,), 1) if msh.topology.dim == 3 else ((), ctx.degree)
+            self.e_n = fem.Function(compat.function_space(msh, "Lagrange", degree, shape), name="stick_slip")
         self.base = self._base_kept = None
         self._p_lag = self._p_lag_form = None
         self._vecs: dict = {}
