@@ -63,6 +63,36 @@ def test_hertz_sphere_octant_on_a_flat(cache):
     assert 1.05 < run["P"] / hertz3d.closed_form()["P"] < 1.15
 
 
+# -- uniform pressure: force, area, peak and the nodal field ------------------------------------------
+@pytest.mark.parametrize("order", [1, 2])
+def test_uniform_compression_gives_a_uniform_pressure(cache, tmp_path, order):
+    """A block (1 x 1 x 0.5) on its symmetry planes x = 0, y = 0, pressed frictionlessly onto the
+    plane z = 0 by its top face moving down by 1e-3 (z only; sides free): a uniaxial state, which
+    the elements hold exactly, and Nitsche's contact is consistent, so the pressure is uniform,
+    p = F / A with A the current bottom area (1 + nu eps)^2 (to O(eps^2)); ContactArea is that area,
+    ContactPeak and the VTK's nodal contact_pressure at every bottom node are F / A."""
+    import meshio
+    md = cm.box(1.0, 1.0, 0.5, 0.25, order=order, cache_dir=cache)
+    body = cm.Body(md, "solid", cm.Elastic(E, NU), degree=order)
+    c = cm.Contact("bottom", cm.Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), method="nitsche")
+    items = [cm.Fixed("left", component=0), cm.Fixed("front", component=1),
+             cm.Displacement("top", -1e-3, component=2), c]
+    probes = [cm.ContactForce(c, "f", component=None), cm.ContactArea(c, "A"), cm.ContactPeak(c, "p")]
+    res = cm.Job(body, items, [cm.Step(1)], probes, writers=[cm.VTK(tmp_path / "vtk")]).run()
+    assert res.completed, res.message
+    last = res.last
+    assert abs(last["f_fx"]) < 1e-9 and abs(last["f_fy"]) < 1e-9
+    eps = 1e-3 / 0.5
+    assert last["A"] == pytest.approx((1.0 + NU * eps) ** 2, rel=2e-5)
+    p = last["f_fz"] / last["A"]
+    assert p == pytest.approx(E * 2e-3, rel=2e-2)
+    assert last["p"] == pytest.approx(p, rel=1e-6)
+    m = meshio.read(sorted((tmp_path / "vtk").glob("*.vtu"))[-1])
+    bottom = np.isclose(m.points[:, 2], 0.0)
+    np.testing.assert_allclose(m.point_data["contact_pressure"][bottom].ravel(), p, rtol=1e-6)
+    assert np.all(m.point_data["contact_pressure"][~bottom] == 0.0)
+
+
 # -- Coulomb: a block sliding diagonally -------------------------------------------------------------
 E, NU, MU = 1000.0, 0.3, 0.3
 DEPTH, DRAG = 0.01, np.array([0.03, 0.04])       # the drag's direction (0.6, 0.8)
@@ -169,7 +199,8 @@ TAYLOR = ([dict(method=m, friction=f) for m in ("penalty", "nitsche") for f in (
           + [dict(method="nitsche", friction="slip", friction_law="coulomb"),
              dict(method="penalty", friction="slip", friction_law="coulomb"),
              dict(method="penalty", friction="slip", obstacle="sphere"),
-             dict(method="nitsche", friction="none", obstacle="cylinder")])
+             dict(method="nitsche", friction="none", obstacle="cylinder"),
+             dict(method="penalty", friction="stick", obstacle="cylinder")])
 
 
 @pytest.mark.parametrize("case", TAYLOR, ids=["-".join(map(str, c.values())) for c in TAYLOR])
