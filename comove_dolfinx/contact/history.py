@@ -10,7 +10,8 @@ the lag state of friction and the penalty friction's stick part.
   evaluated from the converged state u_lag was solved from (``base``, a FacetBase), not from the
   one after it;
 * ``e_n``: the penalty friction's stick part (a length along t_o: the elastic tangential slip; in 3D
-  a tangential vector, linear on the facets), a boundary field, the lumped projection of the new stick part at each converged increment.
+  a tangential vector, linear on the facets), a boundary field, the lumped projection of the new
+  stick part at each converged increment.
 """
 from __future__ import annotations
 

@@ -16,6 +16,10 @@ Friction (``mu > 0``) has two laws, chosen by ``friction``:
   same Newton loop as everything else (the threshold's derivative is in the Jacobian, which is then
   unsymmetric).
 
+In 3D (a body of kind ``solid`` against a Plane of 3-vectors, a Sphere or a Cylinder) the slip is a
+vector of the obstacle's tangent plane and the friction traction returns to the Coulomb disc
+(terms.py, laws.py); the obstacle's dimension must be the body's.
+
 The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = min(gamma0,
 10), docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
 tangential slip) as a boundary field (a lumped projection at each converged increment); Nitsche's
