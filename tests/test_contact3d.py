@@ -127,7 +127,7 @@ def test_diagonal_sliding_obeys_coulomb(cache, method, friction):
     q = np.array([last["f_fx"], last["f_fy"]])
     normal = last["f_fz"] if friction == "coulomb" else last["lag_z"]
     assert last["stick"] == 0.0 and last["slip"] > 0.9
-    assert np.linalg.norm(q) == pytest.approx(MU * normal, rel=1e-3)
+    assert np.linalg.norm(q) == pytest.approx(MU * normal, rel=1e-4)
     assert q / np.linalg.norm(q) == pytest.approx(DRAG / np.linalg.norm(DRAG), abs=1e-3)
 
 
@@ -155,7 +155,7 @@ def test_sliding_on_two_ranks_is_the_serial_one(cache):
 
 
 # -- Taylor tests ------------------------------------------------------------------------------------
-FRICTION = {"none": 0.0, "slip": 0.1, "stick": 5.0}
+FRICTION = {"none": 0.0, "slip": 0.1, "stick": 5.0, "partial": 5.0}
 
 
 def _obstacle(kind):
@@ -192,6 +192,8 @@ def _state(cache, method="penalty", friction="slip", obstacle="plane", friction_
         assert slip > 0.2 * (stick + slip), (stick, slip)
     elif friction == "stick":
         assert slip == 0.0 and stick > 0.0, (stick, slip)
+    elif friction == "partial":          # the points that came into contact since the lag state slip
+        assert slip > 0.1 * stick and stick > 0.1 * slip, (stick, slip)
     return m
 
 
@@ -200,7 +202,7 @@ TAYLOR = ([dict(method=m, friction=f) for m in ("penalty", "nitsche") for f in (
              dict(method="penalty", friction="slip", friction_law="coulomb"),
              dict(method="penalty", friction="slip", obstacle="sphere"),
              dict(method="nitsche", friction="none", obstacle="cylinder"),
-             dict(method="penalty", friction="stick", obstacle="cylinder")])
+             dict(method="penalty", friction="partial", obstacle="cylinder")])
 
 
 @pytest.mark.parametrize("case", TAYLOR, ids=["-".join(map(str, c.values())) for c in TAYLOR])
