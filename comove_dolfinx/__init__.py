@@ -52,11 +52,11 @@ _API = {
     "mechanics.body": ("Body", "BodyError"),
     "mechanics.materials": ("Elastic", "J2", "Chen", "Hardening", "MaterialError"),
     "loads": ("Fixed", "Displacement", "Pressure", "Traction", "BodyForce", "PointLoad", "ItemError"),
-    "contact": ("Contact", "Plane", "Circle", "Profile", "ContactError"),
+    "contact": ("Contact", "Plane", "Circle", "Profile", "Sphere", "Cylinder", "ContactError"),
     "job": ("Step", "Job", "Results", "JobError"),
     "solver": ("NewtonSettings", "SettingsError"),
     "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "ContactPeak",
-               "Reaction", "MaxPlasticStrain", "Value"),
+               "ContactArea", "Reaction", "MaxPlasticStrain", "Value"),
     "io": ("Writer", "HistoryCSV", "VTK", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),
     "presets": ("get_scene", "SCENES"),
 }

@@ -11,6 +11,7 @@ the same values. A job's history is the increment, time and load columns followe
     cm.ContactForce(contact, "force", component=1, scale=-2.0)   # symmetry: twice the quarter's
     cm.ContactLength(contact, "contact_width", scale=2.0)
     cm.ContactPeak(contact, "p_max")                  # the largest contact pressure
+    cm.ContactArea(contact, "area", scale=4.0)        # 3D: the contact area (four quarters)
     cm.Reaction("left")                               # left_fx, left_fy: the supports' force
     cm.MaxPlasticStrain()
     cm.Value("crown_gap", lambda model: ...)          # anything else, from the model
@@ -50,7 +51,7 @@ def check_contacts(probes, items) -> None:
     """ProbeError naming the first probe that reads a contact which is not one of ``items`` (it would
     read a contact that the job never builds)."""
     for probe in probes:
-        if not isinstance(probe, (ContactForce, ContactLength, ContactEdges, ContactPeak)):
+        if not isinstance(probe, (ContactForce, ContactLength, ContactEdges, ContactPeak, ContactArea)):
             continue
         contact, name = probe.contact, f"{type(probe).__name__} {probe.columns[0]!r}"
         if contact is None:
@@ -129,15 +130,27 @@ class NodeDisplacement(Probe):
         return {self.columns[0]: u[self.component]}
 
 
+def _body_dim(probe: str, model, dims: tuple, alt: str) -> None:
+    """ProbeError unless the model's body has one of the dimensions ``dims``; ``alt``: the probe to
+    use instead."""
+    dim = model.V.dofmap.index_map_bs
+    if dim not in dims:
+        raise ProbeError(f"{probe} is not defined for a {dim}D body: use {alt}")
+
+
 class ContactForce(Probe):
-    """Force of a contact item's obstacle on the body: ``component`` 0 or 1 times ``scale`` (one
-    column ``name``), or both components (``<name>_fx``, ``<name>_fy``)."""
+    """Force of a contact item's obstacle on the body: ``component`` 0, 1 (or 2, z, for a 3D
+    obstacle) times ``scale`` (one column ``name``), or every component (``<name>_fx``,
+    ``<name>_fy`` and, for a 3D obstacle, ``<name>_fz``)."""
 
     def __init__(self, contact, name: str = "contact_force", component: int | None = 1, scale: float = 1.0):
         _columns(name, scale)
-        _refuse(choice("component", component, (None, 0, 1), " (0: x, 1: y, None: both)"))
+        _refuse(choice("component", component, (None, 0, 1, 2), " (0: x, 1: y, 2: z in 3D, None: all)"))
         self.contact, self.component, self.scale = _contact_of(f"ContactForce {name!r}", contact), component, scale
-        self.columns = (name,) if component is not None else (f"{name}_fx", f"{name}_fy")
+        dim = getattr(getattr(contact, "obstacle", None), "dim", 2)
+        _refuse(None if component is None or component < dim else
+                f"ContactForce {name!r}: component = 2 (z) needs a 3D obstacle, the contact's is 2D: give 0 or 1")
+        self.columns = (name,) if component is not None else tuple(f"{name}_f{c}" for c in "xyz"[:dim])
 
     def __call__(self, model) -> dict:
         f = self.scale * self.contact.force()
@@ -157,6 +170,27 @@ class ContactLength(Probe):
         _columns(name, scale)
         self.contact, self.scale, self.columns = _contact_of(f"ContactLength {name!r}", contact), scale, (name,)
 
+    def attach(self, model) -> None:
+        _body_dim(f"ContactLength {self.columns[0]!r}", model, (2,), "ContactArea (the contact area)")
+
+    def __call__(self, model) -> dict:
+        return {self.columns[0]: self.scale * self.contact.zone().extent}
+
+
+class ContactArea(Probe):
+    """3D: the contact set's current area (times ``scale``; one column ``name``): the area of the
+    boundary's facets, on the current surface, where the pressure at the facet quadrature points
+    is positive (the reference area under linear kinematics, ``small_strain``). A facet cut by the
+    contact's edge counts by its quadrature points in contact, so the area converges with the mesh
+    at the rate at which the edge band narrows (docs/api.md, "Contact of 3D bodies")."""
+
+    def __init__(self, contact, name: str = "contact_area", scale: float = 1.0):
+        _columns(name, scale)
+        self.contact, self.scale, self.columns = _contact_of(f"ContactArea {name!r}", contact), scale, (name,)
+
+    def attach(self, model) -> None:
+        _body_dim(f"ContactArea {self.columns[0]!r}", model, (3,), "ContactLength (the contact length)")
+
     def __call__(self, model) -> dict:
         return {self.columns[0]: self.scale * self.contact.zone().extent}
 
@@ -172,6 +206,9 @@ class ContactEdges(Probe):
         self.contact, self.axis = _contact_of(f"ContactEdges {name!r}", contact), axis
         self.columns = (f"{name}_min", f"{name}_max")
 
+    def attach(self, model) -> None:
+        _body_dim(f"ContactEdges {self.columns[0][:-4]!r}", model, (2,), "ContactArea (the contact area)")
+
     def __call__(self, model) -> dict:
         return dict(zip(self.columns, self.contact.zone_edges(self.axis)))
 
@@ -179,7 +216,8 @@ class ContactEdges(Probe):
 class ContactPeak(Probe):
     """The largest contact pressure per current area (times ``scale``; one column ``name``): the
     largest value at the facet quadrature points, where the contact law is evaluated (0 without
-    contact). Accuracy against Hertz's peak: docs/api.md, "Contact results"."""
+    contact); for a 3D body the largest value of the nodal pressure field. Accuracy against
+    Hertz's peak: docs/api.md, "Contact results" and "Contact of 3D bodies"."""
 
     def __init__(self, contact, name: str = "peak_pressure", scale: float = 1.0):
         _columns(name, scale)

@@ -65,15 +65,15 @@ def test_solid_needs_a_3d_mesh(cache):
         NodeDisplacement("tip", (1.0, 0.0), component=2)
 
 
-def test_contact_of_3d_bodies_is_refused_in_one_line(cache):
-    """Contact is 2D only: a 3D job with a contact item stops with the project's error naming it,
-    before any increment."""
+def test_a_2d_obstacle_with_a_3d_body_is_refused_in_one_line(cache):
+    """A 3D job whose contact item has a 2D obstacle (a plane of 2-vectors) stops with the project's
+    error naming the dimensions and the fix, before any increment."""
     import comove_dolfinx as cm
     from comove_dolfinx.contact.obstacles import ContactError
     md = geometry.box(1.0, 0.5, 0.25, 0.25, order=1, cache_dir=cache)
     body = Body(md, "solid", Elastic(1.0, 0.3), degree=1)
     contact = cm.Contact("bottom", cm.Plane((0.0, -1.0), (0.0, 1.0)))
-    with pytest.raises(ContactError, match="contact of 3D bodies .* is not available"):
+    with pytest.raises(ContactError, match="the obstacle Plane is 2D, the body 3D: give a 3D obstacle"):
         cm.Job(body, [Fixed("left"), contact], [cm.Step(1)]).run()
 
 

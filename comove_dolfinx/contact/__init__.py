@@ -1,7 +1,7 @@
 """Unilateral contact with rigid obstacles, penalty or Nitsche, with lagged Coulomb friction."""
 from ..choices import CONTACT_METHODS as METHODS
 from .item import FACET_DEGREE, Contact, ZoneInfo
-from .obstacles import Circle, ContactError, Obstacle, Plane, Profile
+from .obstacles import Circle, ContactError, Cylinder, Obstacle, Plane, Profile, Sphere
 
-__all__ = ["FACET_DEGREE", "METHODS", "Circle", "Contact", "ContactError", "Obstacle", "Plane", "Profile",
-           "ZoneInfo"]
+__all__ = ["FACET_DEGREE", "METHODS", "Circle", "Contact", "ContactError", "Cylinder", "Obstacle", "Plane",
+           "Profile", "Sphere", "ZoneInfo"]

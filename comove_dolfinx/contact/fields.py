@@ -23,7 +23,7 @@ from .tracking import Dependencies
 @dataclass
 class BoundaryNodes:
     """The contact boundary's nodes that this rank owns: ``nodes`` in the numbering of the
-    displacement's blocked dofs, ``X`` their reference coordinates (n, 2)."""
+    displacement's blocked dofs, ``X`` their reference coordinates (n, 2), in 3D (n, 3)."""
 
     nodes: np.ndarray
     X: np.ndarray
@@ -35,20 +35,21 @@ class BoundaryNodes:
         dofs = fem.locate_dofs_topological(V.sub(0), ctx.mesh.topology.dim - 1, ctx.facets(boundary))
         nodes = np.unique(dofs // V.dofmap.index_map_bs)          # unrolled indices of V
         nodes = nodes[nodes < V.dofmap.index_map.size_local]       # owned nodes only
-        return cls(nodes, V.tabulate_dof_coordinates()[nodes, :2])
+        return cls(nodes, V.tabulate_dof_coordinates()[nodes, :ctx.mesh.topology.dim])
 
 
 class BoundaryFields:
     """The nodal fields ``pressure`` and ``shear`` of one contact boundary.
 
     ``p_cur``, ``q_cur``: the pressure and the tangential traction per unit current area (UFL; q_cur
-    None without friction); ``ds``: the contact boundary's measure; ``nodes``: its
+    None without friction; in 3D the tangential traction vector, whose magnitude the field
+    ``shear`` holds); ``ds``: the contact boundary's measure; ``nodes``: its
     :class:`BoundaryNodes`.
     """
 
     def __init__(self, ctx, boundary: str, p_cur, q_cur, ds, nodes: BoundaryNodes, comm):
         msh, fdim = ctx.mesh, ctx.mesh.topology.dim - 1
-        self.comm = comm
+        self.comm, self.dim = comm, fdim + 1
         S = compat.function_space(msh, "Lagrange", ctx.degree)
         # pressure and shear are projected with linear weights (non-negative hat functions), so a
         # pressure that the law keeps >= 0 stays >= 0 at the nodes; then interpolated onto S
@@ -56,7 +57,8 @@ class BoundaryFields:
         phi1 = ufl.TestFunction(S1)
         self._ufl = {"p": p_cur * phi1 * ds}
         if q_cur is not None:
-            self._ufl["q"] = q_cur * phi1 * ds
+            q = ufl.sqrt(ufl.dot(q_cur, q_cur)) if len(q_cur.ufl_shape) else q_cur
+            self._ufl["q"] = q * phi1 * ds
         self._forms: dict = {}
         self.pressure = fem.Function(S, name="contact_pressure")
         self.shear = fem.Function(S, name="contact_shear")
@@ -71,7 +73,7 @@ class BoundaryFields:
         self._off[sdofs] = False                     # dofs away from the contact boundary
         # the boundary field's dof at each of the boundary's nodes (same points, matched by position
         # among the boundary's dofs, ghosts included)
-        XS = np.round(S.tabulate_dof_coordinates()[sdofs, :2], 12).tolist()
+        XS = np.round(S.tabulate_dof_coordinates()[sdofs, :self.dim], 12).tolist()
         key = {tuple(x): int(d) for x, d in zip(XS, sdofs)}
         self.node_sdof = np.array([key.get(tuple(x), -1) for x in np.round(nodes.X, 12).tolist()],
                                   dtype=np.int64)
@@ -124,7 +126,7 @@ class BoundaryFields:
             f = self.field(f)
         elif f is self.pressure or f is self.shear:
             self.update()
-        X = f.function_space.tabulate_dof_coordinates()[self.sdofs, :2]
+        X = f.function_space.tabulate_dof_coordinates()[self.sdofs, :self.dim]
         return (np.concatenate(self.comm.allgather(X)),
                 np.concatenate(self.comm.allgather(f.x.array[self.sdofs])))
 
@@ -132,16 +134,19 @@ class BoundaryFields:
 def p1_interpolation(S, S1, degree: int):
     """(dofs of S, the two P1 dofs whose mean is their value) for the interpolation of a P1
     field into the boundary fields' space S (P1 or P2: a vertex takes its value, an edge's
-    midpoint the mean of the edge's ends), in numpy: dolfinx's interpolation between two spaces
-    cost as much as the rest of the output. None for other degrees."""
+    midpoint the mean of the edge's ends; triangles and tetrahedra), in numpy: dolfinx's
+    interpolation between two spaces cost as much as the rest of the output. None for other
+    degrees."""
     if degree not in (1, 2):
         return None
     tdim = S.mesh.topology.dim
     imap = S.mesh.topology.index_map(tdim)
     n = imap.size_local + imap.num_ghosts
     cs, c1 = compat.cell_dofs(S, n), compat.cell_dofs(S1, n)
-    # the P2 triangle's dofs: the vertices, then the edges opposite vertices 0, 1 and 2
-    ends = [(0, 0), (1, 1), (2, 2)] + ([(1, 2), (0, 2), (0, 1)] if degree == 2 else [])
+    # the P2 cell's dofs: the vertices, then the edges in the reference cell's order (triangle: the
+    # edges opposite vertices 0, 1 and 2)
+    edges = [(2, 3), (1, 3), (1, 2), (0, 3), (0, 2), (0, 1)] if tdim == 3 else [(1, 2), (0, 2), (0, 1)]
+    ends = [(k, k) for k in range(tdim + 1)] + (edges if degree == 2 else [])
     dofs = np.concatenate([cs[:, k] for k in range(len(ends))])
     a = np.concatenate([c1[:, i] for i, _ in ends])
     b = np.concatenate([c1[:, j] for _, j in ends])

@@ -16,6 +16,10 @@ Friction (``mu > 0``) has two laws, chosen by ``friction``:
   same Newton loop as everything else (the threshold's derivative is in the Jacobian, which is then
   unsymmetric).
 
+In 3D (a body of kind ``solid`` against a Plane of 3-vectors, a Sphere or a Cylinder) the slip is a
+vector of the obstacle's tangent plane and the friction traction returns to the Coulomb disc
+(terms.py, laws.py); the obstacle's dimension must be the body's.
+
 The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = min(gamma0,
 10), docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
 tangential slip) as a boundary field (a lumped projection at each converged increment); Nitsche's
@@ -92,7 +96,8 @@ class Contact(Item):
         if why is not None:
             raise ContactError(why)
         if not isinstance(obstacle, Obstacle):
-            raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile")
+            raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile (2D), or a "
+                               "Plane, Sphere or Cylinder (3D)")
         if friction not in FRICTION_LAWS:
             raise ContactError(f"friction = {friction!r} is unknown: choose coulomb (the current pressure) "
                                "or lagged (the last increment's)")
@@ -113,9 +118,12 @@ class Contact(Item):
     def attach(self, ctx):
         """The contact terms of the residual (UFL, linear in the test function); builds the item's
         parts."""
-        if ctx.mesh.topology.dim == 3:
-            raise ContactError(f"contact on {self.boundary!r}: contact of 3D bodies (kind 'solid') is not "
-                               "available; the 2D bodies (plane_strain, plane_stress, axisymmetric) take it")
+        dim, obs = ctx.mesh.topology.dim, self.obstacle
+        if obs.dim != dim:
+            fix = ("give a 3D obstacle: Plane with 3-vectors, Sphere or Cylinder" if dim == 3 else
+                   "give a 2D obstacle: Plane with 2-vectors, Circle or Profile")
+            raise ContactError(f"contact on {self.boundary!r}: the obstacle {type(obs).__name__} is {obs.dim}D, "
+                               f"the body {dim}D: {fix}")
         self.comm, self.u, self._u_n = ctx.mesh.comm, ctx.u, ctx.u_n
         self.obstacle.bind(ctx.mesh)
         self.obstacle.set(self.factor)

@@ -17,6 +17,11 @@ contact traction = p n_o + q t_o, pressure p >= 0, t_o = (-n_o[1], n_o[0]).
       lagged pressure (no derivative) or mu times the pressure these functions return for the current
       iterate (the Coulomb law: UFL differentiates it with the rest).
 
+In 3D the slip is a vector in the obstacle's tangent plane, ds = (I - n_o n_o)(du - dd), and so are the
+trial traction and the stick part; P_s becomes the return to the Coulomb disc of radius s,
+``P_s(x) = x`` for ``|x| <= s``, ``s x / |x|`` otherwise (the ``*_vector`` functions; in 2D they would give the
+scalar laws' numbers along t_o, which stay in use there).
+
 Each function returns the residual integrand (linear in the test function v) with what the outputs
 need; none keeps state, so each can be differentiated and Taylor-tested alone.
 """
@@ -69,3 +74,28 @@ def nitsche_friction(slip, s, t_o, v, gamma, theta, q_u, dq):
     if theta:
         R = -theta / gamma * q_u * dq + R
     return R, q, trial
+
+
+def clip_vector(x, s):
+    """P_s(x) for a vector x: the return to the disc ``|x| <= s`` (stick counted as in :func:`clip`)."""
+    norm = ufl.sqrt(ufl.dot(x, x))
+    return ufl.conditional(ufl.le(norm, s), 1.0, s / norm) * x, norm
+
+
+def penalty_friction_vector(slip, e_n, s, v, gamma):
+    """(residual integrand, tangential traction, ``|trial|``, new stick part) of penalty friction in 3D:
+    ``slip`` and the stick part ``e_n`` are tangential vectors (lengths), the traction is a vector."""
+    trial = gamma * (e_n + slip)
+    q_tr, norm = clip_vector(trial, s)
+    return ufl.dot(q_tr, v), -q_tr, norm, q_tr / gamma
+
+
+def nitsche_friction_vector(slip, s, v, gamma, theta, q_u, dq):
+    """(residual integrand, tangential traction, ``|trial|``) of Nitsche's friction term in 3D: ``q_u``
+    the tangential part of the nominal traction P N, ``dq`` its derivative in the direction v."""
+    trial = q_u - gamma * slip
+    q, norm = clip_vector(trial, s)
+    R = ufl.dot(q, theta * dq - gamma * v) / gamma
+    if theta:
+        R = -theta / gamma * ufl.dot(q_u, dq) + R
+    return R, q, norm

@@ -1,9 +1,13 @@
-"""Rigid obstacles: a plane, a circle (cylinder), a profile with rounded corners; each can move.
+"""Rigid obstacles: a plane, a circle (cylinder), a profile with rounded corners in 2D; a plane, a
+sphere and a cylinder in 3D; each can move.
 
 An obstacle gives, for the current position x = X + u of a boundary point, the signed gap g (>= 0 when
 apart, < 0 when penetrating) and the unit normal n_o pointing from the obstacle to the body's side
 (docs/theory.md section 6.1), in UFL (``gap``, ``normal``) and in NumPy (``gap_np``). It moves rigidly by
 ``motion`` times its contact item's factor (a vector), or along ``motion(factor)`` (a callable).
+Its dimension ``dim`` (2 or 3) follows the vectors it is given: a plane through a point (x, y) is a 2D
+obstacle, through (x, y, z) a 3D one; a contact item refuses an obstacle of the other dimension than
+its body's.
 """
 from __future__ import annotations
 
@@ -22,6 +26,7 @@ class ContactError(ValueError):
 
 
 def _vector(name: str, value, size: int = 2) -> np.ndarray:
+    """``value`` as a float array of ``size`` finite numbers, else ContactError naming ``name``."""
     flat = np.ravel(np.asarray(value, dtype=object))
     ok = len(flat) == size and all(is_number(v) for v in flat)
     a = np.asarray(value, dtype=float) if ok else np.zeros(0)
@@ -30,26 +35,38 @@ def _vector(name: str, value, size: int = 2) -> np.ndarray:
     return a
 
 
-class Obstacle:
-    """A rigid obstacle, fixed or translated rigidly by motion (see the module docstring)."""
+def _dimension(name: str, value) -> int:
+    """2 or 3: how many numbers the point ``value`` has (ContactError otherwise)."""
+    n = len(np.ravel(np.asarray(value, dtype=object)))
+    if n not in (2, 3):
+        raise ContactError(f"{name} = {value!r}: give 2 finite numbers (a 2D body) or 3 (a 3D body)")
+    return n
 
-    def __init__(self, motion=None):
+
+class Obstacle:
+    """A rigid obstacle, fixed or translated rigidly by motion (see the module docstring); ``dim``
+    its dimension (2 or 3)."""
+
+    dim = 2
+
+    def __init__(self, motion=None, dim: int = 2):
+        self.dim = dim
         if motion is not None and not callable(motion):
-            motion = _vector("motion", motion)
+            motion = _vector("motion", motion, dim)
         self.motion = motion
         self.d = None          # its current displacement (a Constant, once bound to a mesh)
 
     def displacement(self, factor: float) -> np.ndarray:
         """Rigid displacement of the obstacle at its item's factor."""
         if self.motion is None:
-            return np.zeros(2)
+            return np.zeros(self.dim)
         if callable(self.motion):
-            return _vector("motion(factor)", self.motion(factor))
+            return _vector("motion(factor)", self.motion(factor), self.dim)
         return factor * self.motion
 
     def bind(self, mesh) -> None:
         if self.d is None:
-            self.d = fem.Constant(mesh, PETSc.ScalarType((0.0, 0.0)))
+            self.d = fem.Constant(mesh, PETSc.ScalarType((0.0,) * self.dim))
 
     def set(self, factor: float) -> None:
         self.d.value = self.displacement(factor)
@@ -67,12 +84,14 @@ class Obstacle:
 
 
 class Plane(Obstacle):
-    """The rigid half-plane {(x - point) . normal <= 0}; ``normal`` points towards the body."""
+    """The rigid half-plane (2D) or half-space (3D) {(x - point) . normal <= 0}; ``normal`` points
+    towards the body. Two numbers each make a 2D obstacle, three a 3D one."""
 
     def __init__(self, point, normal, motion=None):
-        super().__init__(motion)
-        self.point = _vector("the plane's point", point)
-        n = _vector("the plane's normal", normal)
+        dim = _dimension("the plane's point", point)
+        super().__init__(motion, dim)
+        self.point = _vector("the plane's point", point, dim)
+        n = _vector("the plane's normal", normal, dim)
         if np.linalg.norm(n) == 0:
             raise ContactError("the plane's normal must not be zero")
         self.n = n / np.linalg.norm(n)
@@ -88,15 +107,8 @@ class Plane(Obstacle):
         return (x - self.point - d) @ self.n
 
 
-class Circle(Obstacle):
-    """A rigid disc (cylinder) of radius ``radius``; the body is outside it."""
-
-    def __init__(self, center, radius, motion=None):
-        super().__init__(motion)
-        self.center = _vector("the circle's center", center)
-        if number("radius", radius, gt=0):
-            raise ContactError(f"radius = {radius!r}: the obstacle's radius must be a finite number > 0")
-        self.radius = float(radius)
+class _Ball(Obstacle):
+    """A rigid disc (2D) or ball (3D) of radius ``radius`` about ``center``; the body is outside it."""
 
     def _rel(self, x, d):
         return x - ufl.as_vector(self.center) - (self.d if d is None else d)
@@ -111,6 +123,32 @@ class Circle(Obstacle):
 
     def gap_np(self, x, d):
         return np.linalg.norm(x - self.center - d, axis=1) - self.radius
+
+
+class Circle(_Ball):
+    """A rigid disc (cylinder) of radius ``radius``; the body is outside it. 2D only (``center``
+    (x, y)); in 3D :class:`Sphere` and :class:`Cylinder`."""
+
+    def __init__(self, center, radius, motion=None):
+        if len(np.ravel(np.asarray(center, dtype=object))) == 3:
+            raise ContactError(f"the circle's center = {center!r}: a Circle is 2D; for a 3D body give "
+                               "Sphere(centre, radius) or Cylinder(point, axis, radius)")
+        super().__init__(motion)
+        self.center = _vector("the circle's center", center)
+        if number("radius", radius, gt=0):
+            raise ContactError(f"radius = {radius!r}: the obstacle's radius must be a finite number > 0")
+        self.radius = float(radius)
+
+
+class Sphere(_Ball):
+    """A rigid ball of radius ``radius`` about ``centre`` (x, y, z); the body is outside it (3D)."""
+
+    def __init__(self, centre, radius, motion=None):
+        super().__init__(motion, 3)
+        self.center = _vector("the sphere's centre", centre, 3)
+        if number("radius", radius, gt=0):
+            raise ContactError(f"radius = {radius!r}: the sphere's radius must be a finite number > 0")
+        self.radius = float(radius)
 
 
 class Profile(Obstacle):
@@ -230,6 +268,42 @@ class Profile(Obstacle):
             s = np.clip((x - a - d) @ ab / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(x))
             dist = np.minimum(dist, np.linalg.norm(x - a - d - s[:, None] * ab, axis=1))
         return dist - self.radius
+
+
+class Cylinder(Obstacle):
+    """A rigid cylinder of radius ``radius`` about the axis through ``point`` along ``axis`` (3-vectors,
+    the axis need not be of unit length); the body is outside it (3D). The gap is the distance
+    from the axis minus the radius, the normal points from the axis to x, square to it."""
+
+    def __init__(self, point, axis, radius, motion=None):
+        super().__init__(motion, 3)
+        self.point = _vector("the cylinder's point on the axis", point, 3)
+        a = _vector("the cylinder's axis", axis, 3)
+        if np.linalg.norm(a) == 0:
+            raise ContactError("the cylinder's axis must not be zero: give its direction, e.g. (0, 1, 0)")
+        self.axis = a / np.linalg.norm(a)
+        if number("radius", radius, gt=0):
+            raise ContactError(f"radius = {radius!r}: the cylinder's radius must be a finite number > 0")
+        self.radius = float(radius)
+
+    def _rel(self, x, d):
+        """x's offset from the axis, square to it (UFL)."""
+        r = x - ufl.as_vector(self.point) - (self.d if d is None else d)
+        a = ufl.as_vector(self.axis)
+        return r - ufl.dot(r, a) * a
+
+    def gap(self, x, d=None):
+        r = self._rel(x, d)
+        return ufl.sqrt(ufl.dot(r, r)) - self.radius
+
+    def normal(self, x, d=None):
+        r = self._rel(x, d)
+        return r / ufl.sqrt(ufl.dot(r, r))
+
+    def gap_np(self, x, d):
+        r = x - self.point - d
+        r = r - np.outer(r @ self.axis, self.axis)
+        return np.linalg.norm(r, axis=1) - self.radius
 
 
 def _chain(pieces: list[np.ndarray], path) -> np.ndarray:

@@ -14,6 +14,12 @@ divided by the area stretch ``|J F^-T N|`` it is per current area (in axisymmetr
 the hoop stretch r / R, so the force is the integral of the traction times 2 pi r over the current
 boundary). The force is taken from the residual: F . e = -R_c(u; e) for the constant fields e_x, e_y.
 
+In 3D (a body of kind ``solid``) the traction is p n_o + q, q the tangential traction vector; the
+force has three components; the contact set's measure is its area (the current area of the parts
+of the boundary's facets where the pressure at the facet quadrature points is positive; the
+reference area under linear kinematics); the peak pressure is the largest value of the nodal
+pressure field; the profile along the boundary and the zones' edges are 2D only.
+
 Every method is collective (every rank calls it, and gets the same result).
 """
 from __future__ import annotations
@@ -28,6 +34,7 @@ from petsc4py import PETSc
 
 from ..delegation import delegate
 from .fields import BoundaryFields, BoundaryNodes
+from .obstacles import ContactError
 from .profile import FacetProfile
 from .zones import ContactProfile, Zone, edge_fraction, gauss_points, peak_of, zones_of
 
@@ -39,7 +46,7 @@ __all__ = ["ContactOutputs", "ContactProfile", "Zone", "ZoneInfo", "edge_fractio
 class ZoneInfo:
     """The contact set in the current configuration."""
 
-    extent: float              # current length of the contact set, between its edges (zones.py)
+    extent: float              # current length of the contact set, between its edges (zones.py); 3D: its area
     max_penetration: float     # largest -g over the nodes of the contact boundary (0 if none)
 
     @property
@@ -58,12 +65,15 @@ class ContactOutputs:
     """
 
     def __init__(self, item, ctx):
-        self.item, self.comm = item, item.comm
+        self.item, self.comm, self.dim = item, item.comm, ctx.mesh.topology.dim
         terms = item.terms
-        self._e = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0, 0.0)))
+        self._e = fem.Constant(ctx.mesh, PETSc.ScalarType((0.0,) * self.dim))
         N = ufl.FacetNormal(ctx.mesh)
         stretch = area_stretch(ctx, N)
         self._ufl = {"force": -ufl.replace(terms.R_c, {ctx.v: self._e})}
+        if self.dim == 3:
+            chi = ufl.conditional(ufl.gt(terms.p_ref, 0.0), 1.0, 0.0)
+            self._ufl["area"] = chi * (stretch if ctx.update.geometric else 1.0) * terms.ds
         if item.mu > 0:
             # reference length of the contact set that slips (friction at its threshold) and sticks
             chi = ufl.conditional(ufl.gt(terms.p_ref, 0.0), 1.0, 0.0)
@@ -77,8 +87,8 @@ class ContactOutputs:
         q_cur = terms.q_ref / stretch if terms.q_ref is not None else None
         self.boundary = BoundaryNodes.of(ctx, item.boundary)
         self.fields = BoundaryFields(ctx, item.boundary, p_cur, q_cur, terms.ds, self.boundary, self.comm)
-        self.facet_profile = FacetProfile(ctx, item.obstacle, item.u, p_cur, q_cur, N,
-                                          ctx.facets(item.boundary), self.comm)
+        self.facet_profile = None if self.dim == 3 else \
+            FacetProfile(ctx, item.obstacle, item.u, p_cur, q_cur, N, ctx.facets(item.boundary), self.comm)
 
     def _form(self, name: str):
         """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
@@ -87,26 +97,28 @@ class ContactOutputs:
         return self._compiled[name]
 
     def _components(self, name: str) -> np.ndarray:
-        """The x and y components of the vector that the scalar form ``name`` gives for e = e_x, e_y."""
-        out = np.zeros(2)
-        for i in range(2):
-            self._e.value = np.eye(2)[i]
+        """The x and y (and z) components of the vector that the scalar form ``name`` gives for e = e_x,
+        e_y (, e_z)."""
+        out = np.zeros(self.dim)
+        for i in range(self.dim):
+            self._e.value = np.eye(self.dim)[i]
             out[i] = self.comm.allreduce(fem.assemble_scalar(self._form(name)), op=MPI.SUM)
         return out
 
     def force(self) -> np.ndarray:
-        """Total force of the obstacle on the body (x, y), from the residual's contact term."""
+        """Total force of the obstacle on the body (x, y; in 3D x, y, z), from the residual's contact
+        term."""
         return self._components("force")
 
     def lag_force(self) -> np.ndarray:
         """Force (x, y) of the lag state's pressure on the body, the normal force that the friction
         threshold mu p_lag is taken from: after a commit, the normal part of that increment's
         :meth:`force` (zeros without friction and with the coulomb law, which has no lag state)."""
-        return self._components("lag_force") if "lag_force" in self._ufl else np.zeros(2)
+        return self._components("lag_force") if "lag_force" in self._ufl else np.zeros(self.dim)
 
     def stick_slip(self) -> tuple[float, float]:
-        """Reference lengths of the contact set where friction sticks and where it slips (zeros
-        without friction), at the current iterate, from the quadrature points."""
+        """Reference lengths (3D: areas) of the contact set where friction sticks and where it slips
+        (zeros without friction), at the current iterate, from the quadrature points."""
         if "slip" not in self._ufl:
             return 0.0, 0.0
         return tuple(self.comm.allreduce(fem.assemble_scalar(f), op=MPI.SUM)
@@ -115,13 +127,56 @@ class ContactOutputs:
     def max_penetration(self) -> float:
         """The largest -g over the nodes of the contact boundary (0 if none)."""
         item, b = self.item, self.boundary
-        x = b.X + item.u.x.array.reshape(-1, 2)[b.nodes]
+        x = b.X + item.u.x.array.reshape(-1, self.dim)[b.nodes]
         g = item.obstacle.gap_np(x, item.obstacle.displacement(item.factor))
         return self.comm.allreduce(float(max(-g.min(), 0.0)) if g.size else 0.0, op=MPI.MAX)
 
+    def area(self) -> float:
+        """3D: the contact set's current area (the reference one under linear kinematics): the
+        facets' area where the pressure at the quadrature points is positive."""
+        self._only("area", 3)
+        return self.comm.allreduce(fem.assemble_scalar(self._form("area")), op=MPI.SUM)
+
     def zone(self) -> ZoneInfo:
-        """The contact set's current length (between its edges) and the largest nodal penetration."""
-        return ZoneInfo(self.facet_profile.extent(), self.max_penetration())
+        """The contact set's current length (between its edges; in 3D its area) and the largest
+        nodal penetration."""
+        extent = self.area() if self.dim == 3 else self.facet_profile.extent()
+        return ZoneInfo(extent, self.max_penetration())
+
+    def peak_pressure(self) -> float:
+        """The largest contact pressure per current area: in 2D from the profile at the quadrature
+        points (zones.py), in 3D the largest value of the nodal pressure field (fields.py)."""
+        if self.dim == 2:
+            return self.facet_profile.peak_pressure()
+        f = self.fields.field("pressure")
+        vals = f.x.array[self.fields.sdofs]
+        return self.comm.allreduce(float(vals.max()) if vals.size else 0.0, op=MPI.MAX)
+
+    def _only(self, what: str, dim: int) -> None:
+        """ContactError unless the body has dimension ``dim``."""
+        if self.dim != dim:
+            alt = "the contact area (ContactArea)" if dim == 2 else "the contact length (ContactLength)"
+            raise ContactError(f"the contact's {what} is a {dim}D result, the body is {self.dim}D: ask for {alt}")
+
+    def profile(self):
+        """2D: the pressure profile along the boundary (profile.py)."""
+        self._only("profile", 2)
+        return self.facet_profile.profile()
+
+    def zones(self):
+        """2D: the contact zones along the boundary (zones.py)."""
+        self._only("zones", 2)
+        return self.facet_profile.zones()
+
+    def extent(self) -> float:
+        """2D: the contact set's current length between its edges."""
+        self._only("length", 2)
+        return self.facet_profile.extent()
+
+    def zone_edges(self, axis: int = 0):
+        """2D: the smallest and largest coordinate ``axis`` of the zones' edges."""
+        self._only("zone edges", 2)
+        return self.facet_profile.zone_edges(axis)
 
     @property
     def pressure(self):
@@ -132,22 +187,17 @@ class ContactOutputs:
     @property
     def shear(self):
         """Tangential traction along t_o per current area as a boundary field, like ``pressure``
-        (zero without friction)."""
+        (zero without friction; in 3D the magnitude of the tangential traction)."""
         return self.fields.field("shear")
 
     update_fields = delegate("fields.update")
     boundary_values = delegate("fields.boundary_values")
-    profile = delegate("facet_profile.profile")
-    zones = delegate("facet_profile.zones")
-    extent = delegate("facet_profile.extent")
-    zone_edges = delegate("facet_profile.zone_edges")
-    peak_pressure = delegate("facet_profile.peak_pressure")
 
 
 def area_stretch(ctx, N):
     """The area stretch ``|J F^-T N|`` of the facets (the stress update's F; in axisymmetry with the
     hoop stretch): a quantity per unit reference area divided by it is per unit current area."""
     F = ctx.update.F(ctx.u)
-    N3 = ufl.as_vector([N[0], N[1], 0.0])
+    N3 = N if ctx.mesh.topology.dim == 3 else ufl.as_vector([N[0], N[1], 0.0])
     cof = ufl.det(F) * ufl.inv(F).T
     return ufl.sqrt(ufl.dot(cof * N3, cof * N3))

@@ -45,7 +45,7 @@ class ContactTerms:
         The contact boundary's measure (the facet rule of degree ``FACET_DEGREE``).
     p_ref, q_ref
         The contact pressure and the tangential traction along t_o, per unit reference area
-        (q_ref None without friction).
+        (q_ref None without friction; in 3D the tangential traction vector).
     slipping
         Where the friction law slips (a UFL condition; None without friction).
     p_lag, n_lag
@@ -88,6 +88,8 @@ class ContactTerms:
         else:
             s = self.mu_c * self.p_ref          # the current pressure: differentiated with the rest
         u, v, obs = ctx.u, ctx.v, item.obstacle
+        if obs.dim == 3:
+            return self._friction_3d(item, ctx, history, s, gamma_t, n_o, PN)
         t_o = ufl.as_vector([-n_o[1], n_o[0]])
         slip = ufl.dot(t_o, (u - ctx.u_n) - (obs.d - history.d_n))
         if item.method == "penalty":
@@ -97,6 +99,24 @@ class ContactTerms:
             Rt, self.q_ref, trial = laws.nitsche_friction(slip, s, t_o, v, gamma_t, item.theta, q_u,
                                                           ufl.derivative(q_u, u, v))
         self.slipping = ufl.gt(abs(trial), s)
+        return Rt
+
+    def _friction_3d(self, item, ctx, history, s, gamma_t, n_o, PN):
+        """The tangential term in 3D: the slip is the vector (I - n_o n_o)(du - dd), the trial
+        traction returns to the Coulomb disc of radius s (laws.py's ``*_vector`` laws); the
+        penalty's stick part enters projected onto the current tangent plane (on a curved obstacle
+        the plane turns from one increment to the next)."""
+        u, v, obs = ctx.u, ctx.v, item.obstacle
+        tangential = ufl.Identity(3) - ufl.outer(n_o, n_o)
+        slip = tangential * ((u - ctx.u_n) - (obs.d - history.d_n))
+        if item.method == "penalty":      # the stick part carried into the current tangent plane
+            Rt, self.q_ref, norm, self.e_new = laws.penalty_friction_vector(slip, tangential * history.e_n,
+                                                                            s, v, gamma_t)
+        else:
+            q_u = tangential * PN
+            Rt, self.q_ref, norm = laws.nitsche_friction_vector(slip, s, v, gamma_t, item.theta, q_u,
+                                                                ufl.derivative(q_u, u, v))
+        self.slipping = ufl.gt(norm, s)
         return Rt
 
     def _lag_pressure(self, item, ctx, history, gamma, N):

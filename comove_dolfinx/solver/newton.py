@@ -218,9 +218,10 @@ class Newton(LineSearches):
         nodes, as bytes of a boolean mask), or None without contact. Local, no collective call."""
         if not self.contacts:
             return None
+        dim = self.model.V.dofmap.index_map_bs
         if self._X is None:
-            self._X = self.model.V.tabulate_dof_coordinates()[:, :2]
-        xu = self.model.u.x.array.reshape(-1, 2)
+            self._X = self.model.V.tabulate_dof_coordinates()[:, :dim]
+        xu = self.model.u.x.array.reshape(-1, dim)
         parts = []
         for item in self.contacts:
             nodes = item.nodes

@@ -151,10 +151,11 @@ def _active_set(model):
     for item in model.items:
         if getattr(item, "kind", "") != "contact":
             continue
+        dim = model.V.dofmap.index_map_bs
         if X is None:
-            X = model.V.tabulate_dof_coordinates()[:, :2]
+            X = model.V.tabulate_dof_coordinates()[:, :dim]
         nodes = item.nodes
-        x = X[nodes] + model.u.x.array.reshape(-1, 2)[nodes]
+        x = X[nodes] + model.u.x.array.reshape(-1, dim)[nodes]
         g = item.obstacle.gap_np(x, item.obstacle.displacement(item.factor))
         out.append(tuple(np.flatnonzero(g < 0.0)))
     return tuple(out)
