@@ -29,7 +29,7 @@ from .. import compat
 CROWN = 0.2
 #: MUMPS through PETSc's options, as dolfinx's demos set it
 MUMPS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-#: Newton's tolerance on the residual's norm relative to the increment's first
+#: Newton's relative tolerance (on the correction: :func:`comove_dolfinx.compat.plain_newton`)
 RTOL = 1e-8
 
 
@@ -56,9 +56,11 @@ class PlainNeoHooke:
         constants are used; nothing of it is changed).
     R_out : float
         The ring's outer radius (locates the crown).
+    monitor : callable, optional
+        Called with the norm of each residual Newton evaluates (for tests; it costs a norm).
     """
 
-    def __init__(self, model, R_out: float):
+    def __init__(self, model, R_out: float, monitor=None):
         self.model = model
         msh, V = model.mesh, model.V
         self.u = fem.Function(V)
@@ -71,7 +73,8 @@ class PlainNeoHooke:
         self.J = ufl.derivative(self.F, self.u, du)
         self.push = fem.Constant(msh, PETSc.ScalarType(0.0))
         self.bcs = [*model.bcs, self._crown_bc(R_out)]
-        self.solve = compat.plain_newton(self.F, self.u, self.bcs, self.J, MUMPS, RTOL)
+        self.solve = compat.plain_newton(self.F, self.u, self.bcs, self.J, MUMPS, RTOL,
+                                          monitor=monitor)
 
     def _crown_bc(self, R_out: float):
         """u_y = ``self.push`` on the outer boundary within CROWN * R_out of the axis."""
