@@ -58,7 +58,7 @@ def _row(size: float, pairs: list[dict]) -> dict:
     return row
 
 
-def against_dolfinx(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 5, increments: int = 4,
+def against_dolfinx(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 5, increments: int = 8,
                     overrides=()) -> list[dict]:
     """The ring's iteration against plain dolfinx's at each size, ``repeats`` pairs of runs of
     ``increments`` increments (ring scene parameters ``overrides``, "key=value"): dolfinx.csv (one
