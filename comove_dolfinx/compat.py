@@ -318,6 +318,11 @@ def plain_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str = "
     return solve
 
 
+def plain_newton_kind() -> str:
+    """Which of dolfinx's Newton solvers :func:`plain_newton` uses here: "NewtonSolver" or "SNES"."""
+    return "SNES" if VERSION >= (0, 10) else "NewtonSolver"
+
+
 def _snes_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str, monitor):
     """``plain_newton`` from dolfinx 0.10 on: ``fem.petsc.NonlinearProblem`` on SNES."""
     options = {"snes_type": "newtonls", "snes_linesearch_type": "basic", "snes_rtol": rtol,

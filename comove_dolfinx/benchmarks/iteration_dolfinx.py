@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import pathlib
 
+from .. import compat
 from .iteration_floor import _sampled_run
 from .plain_dolfinx import PlainNeoHooke, pushes_of
 from .runs import COMM, RING_SIZES, build, say, stats, write_csv
@@ -77,5 +78,6 @@ def against_dolfinx(out: pathlib.Path, sizes=RING_SIZES, repeats: int = 5, incre
     if COMM.rank == 0:
         (out / "dolfinx_pairs.json").write_text(json.dumps(
             {"increments": increments, "repeats": repeats, "overrides": list(overrides),
+             "dolfinx": compat.dolfinx.__version__, "plain_solver": compat.plain_newton_kind(),
              "pairs": every}, indent=1))
     return rows
