@@ -124,6 +124,7 @@ stability: venv
 	$(PY) -m comove_dolfinx.stability all --out results/stability
 
 cost: venv
+	$(PY) -m comove_dolfinx.benchmarks dolfinx --out results/cost
 	$(PY) -m comove_dolfinx.benchmarks floor --out results/cost
 	$(PY) -m comove_dolfinx.benchmarks solvers --out results/cost
 	$(PY) -m comove_dolfinx.benchmarks scale --out results/cost

@@ -263,6 +263,8 @@ def _parser():
     st.add_argument("--jobs", type=int, default=2, help="runs at a time (default 2)")
     st.add_argument("--quick", action="store_true", help="the updates' sweeps only, fewer increments")
     st.add_argument("--replot", action="store_true", help="charts and summaries again from the saved runs")
+    st.add_argument("--executor", default="auto", help="local (processes here), mpi (under "
+                    "mpiexec -n N python -m mpi4py.futures) or auto (default: mpi when started so)")
     ve = sub.add_parser("verify", help="the verification cases against published results (docs/verification.md)")
     ve.add_argument("case", help="a case's name, or all")
     ve.add_argument("--out", default="results/verify", help="output folder (default results/verify)")
@@ -305,13 +307,13 @@ def _study(args) -> int:
     """The study runs every case as its own ``comove run`` process: nothing heavy is loaded here."""
     import pathlib
 
-    from .study import PLANS
+    from .study import PLANS, executors
     from .study import main as study_main
     scenes = list(PLANS) if args.scene == "all" else [args.scene]
     err = None
-    if _ranks() > 1:
-        err = ("study: it starts its runs as processes of its own, two at a time (--jobs): "
-               "start it without mpirun")
+    executor, why = executors.choose(args.executor)     # (local or mpi; a launcher without a pool)
+    if why is not None:
+        err = why
     elif any(s not in PLANS for s in scenes):
         err = f"study {args.scene!r}: choose one of {', '.join(PLANS)} or all"
     elif args.repeat < 1 or args.jobs < 1:
@@ -327,7 +329,7 @@ def _study(args) -> int:
     if err is not None:
         print(f"comove: {err}", file=sys.stderr)
         return 2
-    return study_main(scenes, out, args.repeat, args.jobs, args.quick, args.replot)
+    return study_main(scenes, out, args.repeat, args.jobs, args.quick, args.replot, executor)
 
 
 def _verify(args) -> int:

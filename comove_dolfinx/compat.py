@@ -272,3 +272,69 @@ def model_to_mesh(model, comm, rank: int, gdim: int = 2):
         return data.mesh, data.cell_tags, data.facet_tags
     from dolfinx.io import gmshio
     return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+
+
+# ------------------------------------------------------------------------------------------------
+# dolfinx's own Newton solver (the benchmarks' reference: what a user writes without this package)
+# ------------------------------------------------------------------------------------------------
+def plain_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str = "plain_",
+                 monitor=None):
+    """A solve function for ``F(u; v) = 0`` by dolfinx's own Newton solver, set up as its demos do:
+    converged when the correction's norm falls below ``rtol`` times the first correction's (up to
+    0.9, the "incremental" criterion) or below ``rtol`` times the solution's (SNES's step test,
+    from 0.10; also its residual test at ``rtol``), the linear solver from ``petsc_options`` (keys
+    without a prefix). Calling the function solves from the current ``u`` and returns
+    (iterations, converged). ``monitor``: called with the norm of each residual Newton evaluates.
+
+    Up to 0.9 it is ``fem.petsc.NonlinearProblem`` with ``nls.petsc.NewtonSolver`` (its KSP's options
+    under ``prefix``); from 0.10, where that pair is deprecated, the new ``NonlinearProblem`` on
+    PETSc's SNES (``newtonls`` without a line search, its options under ``prefix``)."""
+    if VERSION >= (0, 10):
+        return _snes_newton(F, u, bcs, J, petsc_options, rtol, prefix, monitor)
+    from dolfinx.nls.petsc import NewtonSolver
+    problem = fem_petsc.NonlinearProblem(F, u, bcs=list(bcs), J=J)
+    if monitor is not None:
+        residual = problem.F
+
+        def reported(x, b):
+            residual(x, b)
+            monitor(b.norm())
+        problem.F = reported
+    solver = NewtonSolver(u.function_space.mesh.comm, problem)
+    solver.convergence_criterion = "incremental"
+    solver.rtol, solver.atol, solver.max_it = rtol, 0.0, 50
+    solver.error_on_nonconvergence = False
+    ksp = solver.krylov_solver
+    ksp.setOptionsPrefix(prefix)
+    opts = PETSc.Options()
+    for key, value in petsc_options.items():
+        opts[f"{prefix}{key}"] = value
+    ksp.setFromOptions()
+
+    def solve():
+        n, converged = solver.solve(u)
+        return int(n), bool(converged)
+    solve.keep = (problem, solver)                  # the objects live as long as the function
+    return solve
+
+
+def plain_newton_kind() -> str:
+    """Which of dolfinx's Newton solvers :func:`plain_newton` uses here: "NewtonSolver" or "SNES"."""
+    return "SNES" if VERSION >= (0, 10) else "NewtonSolver"
+
+
+def _snes_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str, monitor):
+    """``plain_newton`` from dolfinx 0.10 on: ``fem.petsc.NonlinearProblem`` on SNES."""
+    options = {"snes_type": "newtonls", "snes_linesearch_type": "basic", "snes_rtol": rtol,
+               "snes_atol": 0.0, "snes_stol": rtol, "snes_max_it": 50, **petsc_options}
+    problem = fem_petsc.NonlinearProblem(F, u, bcs=list(bcs), J=J, petsc_options_prefix=prefix,
+                                         petsc_options=options)
+    if monitor is not None:
+        problem.solver.setMonitor(lambda snes, it, norm: monitor(norm))
+
+    def solve():
+        problem.solve()
+        snes = problem.solver
+        return int(snes.getIterationNumber()), snes.getConvergedReason() > 0
+    solve.keep = (problem,)
+    return solve

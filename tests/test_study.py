@@ -128,3 +128,54 @@ def test_study_refuses_to_start_under_mpirun(tmp_path, monkeypatch, capsys):
     assert cli.main(["study", "ring", "--out", str(tmp_path / "s")]) == 2
     assert capsys.readouterr().err.startswith("comove: study: it starts its runs as processes of its own")
     assert not (tmp_path / "s").exists()
+
+
+_GRID = '''
+import json, pathlib, sys
+from comove_dolfinx.study import PLANS, executors, runner
+from comove_dolfinx.study.plan import Case
+
+if __name__ == "__main__":           # (the pool's workers import this file under another name)
+    kind, why = executors.choose("auto")
+    assert why is None, why
+    cases = [Case("update sr", n, ("update=sr", f"n_increments={n}")) for n in (1, 2)]
+    cases.append(Case("update polar", 2, ("update=polar", "n_increments=2")))
+    with executors.make(kind, 2) as pool:
+        rows = runner.run_all(PLANS["elastica"], cases, pathlib.Path(sys.argv[1]), 1, pool=pool)
+    print(json.dumps({"executor": kind, "rows": rows}))
+'''
+
+#: what a run's row holds besides its clocks
+_TIMINGS = ("cpu_s", "cpu_spread_s", "compile_cpu_s")
+
+
+def test_the_mpi_pool_runs_a_grid_as_the_local_executor_does(tmp_path):
+    """A grid of three elastica runs through mpi4py.futures' pool on two processes (one hands out the
+    runs, one runs them, each a `comove run` of its own) and through the local executor: the
+    executor is detected from the launch, and the rows are the same but for the CPU times."""
+    import json
+
+    import launch
+    script = tmp_path / "grid.py"
+    script.write_text(_GRID)
+    got = {}
+    for name, args, n in (("mpi", ["-m", "mpi4py.futures", script], 2), ("local", [script], 1)):
+        p = launch.run([*args, tmp_path / name], n=n, timeout=600)
+        assert p.returncode == 0, p.stderr[-2000:]
+        got[name] = json.loads(p.stdout.strip().splitlines()[-1])
+    assert got["mpi"]["executor"] == "mpi" and got["local"]["executor"] == "local"
+    rows = {k: [{c: v for c, v in r.items() if c not in _TIMINGS} for r in g["rows"]] for k, g in got.items()}
+    assert json.dumps(rows["mpi"], sort_keys=True) == json.dumps(rows["local"], sort_keys=True)  # (NaN as NaN)
+    assert [r["status"] for r in rows["local"]] == ["completed"] * 3
+    assert all(r["cpu_s"] > 0 for g in got.values() for r in g["rows"])
+
+
+@pytest.mark.parametrize("executor, msg", [
+    ("mpi", "--executor mpi: start the study as mpiexec -n N python -m mpi4py.futures -m "
+            "comove_dolfinx.study ... (N >= 2: one process hands out the runs, N - 1 run them)"),
+    ("dask", "--executor 'dask': choose auto, local, mpi")])
+def test_study_refuses_an_executor_it_cannot_have(executor, msg, tmp_path, capsys):
+    from comove_dolfinx import cli
+    assert cli.main(["study", "ring", "--executor", executor, "--out", str(tmp_path / "s")]) == 2
+    assert capsys.readouterr().err.strip() == f"comove: {msg}"
+    assert not (tmp_path / "s").exists()

@@ -1,9 +1,10 @@
 """Benchmarks of the solver's cost: a tool beside the library, not part of its API (docs/performance.md).
 
-What a Newton iteration costs against what it cannot cost less than, the linear solvers, the MPI
-ranks, the residual along Newton's correction, and the parts of an iteration. Each study writes CSV
-files and charts into ``--out`` and never asserts::
+What a Newton iteration costs against plain dolfinx's on the same mesh and against what it cannot
+cost less than, the linear solvers, the MPI ranks, the residual along Newton's correction, and the
+parts of an iteration. Each study writes CSV files and charts into ``--out`` and never asserts::
 
+    python -m comove_dolfinx.benchmarks dolfinx --out results/cost   # ring: iteration vs plain dolfinx
     python -m comove_dolfinx.benchmarks floor   --out results/cost   # ring: iteration vs linear-elastic floor
     python -m comove_dolfinx.benchmarks parts   --out results/cost   # ring: each part, alone and in the loop
     python -m comove_dolfinx.benchmarks solvers --out results/cost   # ring: direct solvers, orderings, GAMG
@@ -11,7 +12,8 @@ files and charts into ``--out`` and never asserts::
     python -m comove_dolfinx.benchmarks slopes  --out results/cost   # ring: the residual along du
 
 The modules: ``runs`` (a scene's short run, the linear-elastic floor, a factorisation with another
-solver), ``iteration_floor`` (floor), ``loop_parts`` (parts), ``linear_solvers`` (solvers),
+solver), ``plain_dolfinx`` (the neo-Hookean problem solved by dolfinx alone), ``iteration_dolfinx``
+(dolfinx), ``iteration_floor`` (floor), ``loop_parts`` (parts), ``linear_solvers`` (solvers),
 ``ranks`` (scale), ``line_search`` (slopes), ``charts`` and ``command`` (the command line).
 
 CPU time is ``time.process_time`` (the process's, not the machine's); every figure is the median of
@@ -22,7 +24,8 @@ The names below are imported on first use: importing the package loads neither d
 """
 
 _WHERE = {"RING_SIZES": "runs", "ElasticFloor": "runs", "build": "runs", "short_run": "runs",
-          "factor_solve": "runs", "floor": "iteration_floor", "floor_chart": "charts",
+          "factor_solve": "runs", "PlainNeoHooke": "plain_dolfinx",
+          "against_dolfinx": "iteration_dolfinx", "floor": "iteration_floor", "floor_chart": "charts",
           "parts": "loop_parts", "SOLVERS": "linear_solvers", "solvers": "linear_solvers",
           "SCALE": "ranks", "scale": "ranks", "SLOPE_STEPS": "line_search", "SlopeProbe": "line_search",
           "slopes": "line_search", "main": "command"}

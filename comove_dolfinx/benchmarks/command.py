@@ -1,11 +1,11 @@
 """The command line of the benchmarks: ``python -m comove_dolfinx.benchmarks STUDY [options]``.
 
-STUDY is one of floor, parts, solvers, scale, slopes, krylov, solid (the modules of this package say what each
+STUDY is one of dolfinx, floor, parts, solvers, scale, slopes, krylov, solid (the modules of this package say what each
 measures). Options: ``--out DIR`` (results/cost), ``--repeats N``, ``--increments N``, ``--sizes``
 (comma-separated mesh sizes of the ring; solid: of the bent block), ``--solvers`` (comma-separated configurations of
 :data:`~comove_dolfinx.benchmarks.linear_solvers.SOLVERS`; for krylov the names of
 ``NewtonSettings.linear_solver``, also for solid), ``--scenes`` (scale; krylov: one scene) and
-``--set key=value`` (repeatable: a parameter of the ring scene for floor and slopes). A bad option or
+``--set key=value`` (repeatable: a parameter of the ring scene for dolfinx, floor and slopes). A bad option or
 scene parameter is a one-line usage error before any run.
 """
 from __future__ import annotations
@@ -17,35 +17,35 @@ import pathlib
 from ..presets import SceneError, get_scene
 
 PROG = "python -m comove_dolfinx.benchmarks"
-STUDIES = ("floor", "parts", "solvers", "scale", "slopes", "krylov", "solid")
+STUDIES = ("dolfinx", "floor", "parts", "solvers", "scale", "slopes", "krylov", "solid")
 
 
 def _parser(prog: str) -> argparse.ArgumentParser:
     """The command's options."""
-    p = argparse.ArgumentParser(prog=prog, description="What a Newton iteration costs, against what "
-                                "it cannot cost less than; solvers; ranks (docs/performance.md).")
+    p = argparse.ArgumentParser(prog=prog, description="What a Newton iteration costs, against plain "
+                                "dolfinx and a linear-elastic floor; solvers; ranks (docs/performance.md).")
     p.add_argument("study", choices=STUDIES)
     p.add_argument("--out", default="results/cost")
     p.add_argument("--repeats", type=int, default=None,
-                   help="runs per figure (floor, solvers, scale: 3) or calls per timing (parts: 40)")
+                   help="runs per figure (dolfinx: 5 pairs; floor, solvers, scale: 3) or calls per timing (parts: 40)")
     p.add_argument("--increments", type=int, default=None, help="nominal increments of each short run")
-    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (floor, solvers, slopes, krylov)")
+    p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (dolfinx, floor, solvers, slopes, krylov)")
     p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
     p.add_argument("--scenes", default=None, help="comma-separated scenes (scale: ring,plate; "
                    "krylov: one scene, plate)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="overrides",
-                   help="a parameter of the ring scene for its runs (floor, slopes), e.g. predictor=linear")
+                   help="a parameter of the ring scene for its runs (dolfinx, floor, slopes), e.g. predictor=linear")
     return p
 
 
 def _check(p: argparse.ArgumentParser, a: argparse.Namespace, ranks: int) -> None:
     """Usage errors (argparse's exit 2 with one line) for what the studies cannot take."""
-    if a.overrides and a.study not in ("floor", "slopes"):
-        p.error("--set applies to the floor and slopes studies only")
+    if a.overrides and a.study not in ("dolfinx", "floor", "slopes"):
+        p.error("--set applies to the dolfinx, floor and slopes studies only")
     if a.study == "krylov" and a.scenes and "," in a.scenes:
         p.error("krylov takes one scene (--scenes plate)")
-    if a.study == "parts" and ranks > 1:
-        p.error("parts times one rank: run it without mpirun")
+    if a.study in ("parts", "dolfinx") and ranks > 1:
+        p.error(f"{a.study} times one rank: run it without mpirun")
     try:
         get_scene("ring", a.overrides)
     except SceneError as err:
@@ -59,7 +59,10 @@ def _run(a: argparse.Namespace, out: pathlib.Path) -> None:
         kw["increments"] = a.increments
     if a.sizes and a.study != "scale":
         kw["sizes"] = tuple(float(s) for s in a.sizes.split(","))
-    if a.study == "floor":
+    if a.study == "dolfinx":
+        from .iteration_dolfinx import against_dolfinx
+        against_dolfinx(out, overrides=tuple(a.overrides), **kw)
+    elif a.study == "floor":
         from .iteration_floor import floor
         floor(out, overrides=tuple(a.overrides), **kw)
     elif a.study == "parts":

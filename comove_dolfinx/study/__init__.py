@@ -7,6 +7,9 @@ Per scene it writes ``runs.csv`` (every run: method, settings, status, q, error,
 CPU seconds), ``reference.json``, ``pareto.png`` (error against CPU seconds, a curve per method, the
 Pareto front; q against the increments) and ``summary.md``; over the scenes ``claim.csv`` and
 ``study.md``: for each stress update the fewest increments and the least CPU to reach 1 % and 0.1 %.
+
+The runs go through a ``concurrent.futures`` executor (executors.py): local processes, or the workers
+of an MPI pool when started as ``mpiexec -n N python -m mpi4py.futures -m comove_dolfinx.study ...``.
 """
 from __future__ import annotations
 
@@ -20,9 +23,13 @@ __all__ = ["PLANS", "study"]
 
 
 def study(scene: str, out: pathlib.Path, repeat: int = 3, jobs: int = 2, quick: bool = False,
-          echo=print) -> tuple[list[dict], dict, list[dict]]:
-    """Run the study of ``scene`` into out/<scene>; (rows, reference, claim rows)."""
-    from . import report, runner
+          echo=print, pool=None) -> tuple[list[dict], dict, list[dict]]:
+    """Run the study of ``scene`` into out/<scene> through the executor ``pool`` (default: ``jobs``
+    local processes at a time); (rows, reference, claim rows)."""
+    from . import executors, report, runner
+    if pool is None:
+        with executors.make("local", jobs) as local:
+            return study(scene, out, repeat, jobs, quick, echo, local)
     plan = PLANS[scene]
     folder = out / scene
     folder.mkdir(parents=True, exist_ok=True)
@@ -32,10 +39,11 @@ def study(scene: str, out: pathlib.Path, repeat: int = 3, jobs: int = 2, quick: 
         echo(f"  {scene}: {case.family:22s} {' '.join(case.sets):45s} {row['status']:10s} "
              f"q {row['q']:.6g}  {row['newton_its']:4d} its  {row['cpu_s']:6.2f} s")
     ref_cases = plan.reference_cases()
-    ref_rows = dict(zip(ref_cases, runner.run_all(plan, list(ref_cases.values()), folder, 1, jobs, say)))
+    ref_rows = dict(zip(ref_cases, runner.run_all(plan, list(ref_cases.values()), folder, 1, jobs, say,
+                                                  pool)))
     ref = report.reference(plan, ref_rows)
     (folder / "reference.json").write_text(json.dumps({**ref, "runs": ref_rows}, indent=1, default=str))
-    rows = runner.run_all(plan, plan.cases(quick), folder, repeat, jobs, say)
+    rows = runner.run_all(plan, plan.cases(quick), folder, repeat, jobs, say, pool)
     report.add_errors(rows, ref["value"])
     claims = report.claim_rows(plan, rows)
     report.write_csv(folder / "runs.csv", rows)
@@ -60,13 +68,24 @@ def replot(scene: str, out: pathlib.Path) -> tuple[list[dict], dict, list[dict]]
 
 
 def main(scenes: list[str], out: pathlib.Path, repeat: int, jobs: int, quick: bool,
-         again: bool = False) -> int:
-    from . import report
+         again: bool = False, executor: str = "local") -> int:
+    """The study of ``scenes`` into ``out`` through one executor of kind ``executor`` ("local" or
+    "mpi", executors.py) for all of them, or (``again``) its charts and summaries from the saved runs."""
+    from . import executors, report
     claims, parts = [], []
-    for s in scenes:
-        _, _, c = replot(s, out) if again else study(s, out, repeat, jobs, quick)
-        claims += c
-        parts.append((out / s / "summary.md").read_text())
+    t0 = time.perf_counter()
+    pool = None if again else executors.make(executor, jobs)
+    try:
+        for s in scenes:
+            _, _, c = replot(s, out) if again else study(s, out, repeat, jobs, quick, pool=pool)
+            claims += c
+            parts.append((out / s / "summary.md").read_text())
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    if pool is not None:
+        print(f"study: {len(scenes)} scene(s) through the {executor} executor "
+              f"({executors.workers(executor, jobs)} runs at a time) in {time.perf_counter() - t0:.1f} s wall")
     report.write_csv(out / "claim.csv", claims)
     (out / "study.md").write_text("# Speed against accuracy\n\n" + "\n".join(parts))
     return 0

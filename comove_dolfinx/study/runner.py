@@ -1,10 +1,13 @@
-"""Run the study's cases as separate processes (`comove run`), a few at a time, and read what they left.
+"""Run the study's cases as separate processes (`comove run`), through an executor, and read what they left.
 
 A case's cost is the CPU time of its whole process (start-up, imports, mesh, compilation, the run and
 its output; the C compiler counts, as a child it waited for), taken from the kernel's accounting of
 the finished child (os.wait4), and its Newton iterations, failed attempts included. Each case runs
 ``repeat`` times; the CPU time is their median and the spread their range. The first run of a kind
 of model compiles its forms, later ones find them in the JIT cache: the spread shows it.
+
+The cases go to a ``concurrent.futures`` executor (executors.py): threads that each start and wait
+for one process at a time, or the workers of an MPI pool, each of which does the same where it runs.
 """
 from __future__ import annotations
 
@@ -15,11 +18,12 @@ import shutil
 import statistics
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import as_completed
 
 import numpy as np
 
 from ..io.csv_tables import read_history
+from . import executors
 from .plan import Case, ScenePlan
 
 
@@ -27,7 +31,7 @@ def _launch(scene: str, case: Case, folder: pathlib.Path) -> tuple[float, int]:
     """One process; (its CPU seconds with its children, its exit code)."""
     cmd = [sys.executable, "-m", "comove_dolfinx.cli", "run", scene, "--out", str(folder), "--overwrite",
            "--no-progress"] + [a for s in case.sets for a in ("--set", s)]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    env = executors.child_environment()
     with open(folder.parent / f"{folder.name}.log", "w") as log:
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
         _, status, usage = os.wait4(proc.pid, 0)
@@ -95,16 +99,23 @@ def _nominal(case: Case, plan: ScenePlan) -> int:
     return plan.n0
 
 
-def run_all(plan: ScenePlan, cases: list[Case], out: pathlib.Path, repeat: int, jobs: int,
-            progress=None) -> list[dict]:
-    """Every case, ``jobs`` processes at a time; the rows in the order of ``cases``."""
-    def one(case):
-        row = run_case(plan, case, out, repeat)
+def run_all(plan: ScenePlan, cases: list[Case], out: pathlib.Path, repeat: int, jobs: int = 2,
+            progress=None, pool=None) -> list[dict]:
+    """Every case through the executor ``pool`` (default: a local one of ``jobs`` threads, made and
+    shut down here); ``progress(case, row)`` is called here as each finishes; the rows in the order
+    of ``cases``."""
+    if pool is None:
+        with executors.make("local", jobs) as local:
+            return run_all(plan, cases, out, repeat, jobs, progress, local)
+    out = out.resolve()                        # a worker may start in another folder
+    pending = {pool.submit(run_case, plan, case, out, repeat): k for k, case in enumerate(cases)}
+    rows: list = [None] * len(cases)
+    for done in as_completed(pending):
+        k = pending[done]
+        rows[k] = done.result()
         if progress is not None:
-            progress(case, row)
-        return row
-    with ThreadPoolExecutor(max_workers=jobs) as pool:
-        return list(pool.map(one, cases))
+            progress(cases[k], rows[k])
+    return rows
 
 
 def clean(out: pathlib.Path) -> None:
