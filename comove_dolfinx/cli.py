@@ -194,36 +194,16 @@ def main(argv=None) -> int:
     try:
         return _main(argv, parsed)
     except KeyboardInterrupt as err:
-        return _interrupted(err, parsed)
+        return cs.end(err, parsed[0] if parsed else None, _rank(), _ranks())
     except Exception as err:
         if not cs.SIGNALLED:             # a bug: its traceback
             raise
         # an import that a signal cut short fails so (numpy's C extension: ImportError)
-        return _interrupted(err, parsed)
+        return cs.end(err, parsed[0] if parsed else None, _rank(), _ranks())
     finally:
         cs.restore(previous, ignore=argv is None)
         if argv is not None:
             sys.unraisablehook = hook
-
-
-def _interrupted(err: BaseException, parsed: list) -> int:
-    """The exit code of a command ended by a signal (its one line printed). On several ranks,
-    unless the ranks stopped together (a job's increments, parallel.Interrupts), another rank may
-    wait in a collective call that this one will never join, and a launcher that passes Ctrl-C
-    on to the ranks and waits for them (MPICH's) would wait for ever: the ranks are ended by
-    MPI_Abort, rank 0 at once (its run.json and line are written by then), the others a second
-    later, so that rank 0 says its line first unless it is the one that waits."""
-    from . import command_signals as cs
-    code = cs.interrupted(err, parsed[0] if parsed else None, _rank())
-    mpi = sys.modules.get("mpi4py.MPI")
-    if _ranks() > 1 and not getattr(err, "all_ranks", False) and mpi is not None and mpi.Is_initialized():
-        import time
-        sys.stderr.flush()
-        sys.stdout.flush()
-        if _rank() != 0:
-            time.sleep(1.0)
-        mpi.COMM_WORLD.Abort(code)
-    return code
 
 
 def _parser():

@@ -129,3 +129,23 @@ def interrupted(err: BaseException, args, rank: int) -> int:
     # process with SIGINT instead of returning its code; a string run by exec() clears the note.
     exec("None")
     return 143 if why == "SIGTERM" else 130
+
+
+def end(err: BaseException, args, rank: int, ranks: int) -> int:
+    """The exit code of a command ended by a signal, its one line printed (:func:`interrupted`).
+    On several ranks, unless the ranks stopped together (a job's increments, parallel.Interrupts,
+    which marks the exception ``all_ranks``), another rank may wait in a collective call that this
+    one will never join, and a launcher that passes Ctrl-C on to the ranks and waits for them
+    (MPICH's) would wait for ever: the ranks are ended by MPI_Abort, rank 0 at once (its run.json
+    and line are written by then), the others a second later, so that rank 0 says its line first
+    unless it is the one that waits."""
+    code = interrupted(err, args, rank)
+    mpi = sys.modules.get("mpi4py.MPI")
+    if ranks > 1 and not getattr(err, "all_ranks", False) and mpi is not None and mpi.Is_initialized():
+        import time
+        sys.stderr.flush()
+        sys.stdout.flush()
+        if rank != 0:
+            time.sleep(1.0)
+        mpi.COMM_WORLD.Abort(code)
+    return code

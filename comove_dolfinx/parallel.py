@@ -133,7 +133,7 @@ class Interrupts:
                 raise KeyboardInterrupt(signal.Signals(signum).name)
             handler(signum, None)
         except KeyboardInterrupt as err:
-            err.all_ranks = True      # every rank raises it here (cli.py: no rank is left waiting)
+            err.all_ranks = True      # every rank raises it here (command_signals.end)
             raise
 
     def __exit__(self, exc_type, exc, tb) -> bool:
