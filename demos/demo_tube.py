@@ -10,7 +10,7 @@
 # indenter's work against the elastic energy, the plastic dissipation and the friction's
 # dissipation at the end (1 %); it exits with status 1 if that check fails.
 #
-# Run: `python demos/demo_tube.py [--out DIR] [--size 5] [--increments 16]`, also under mpirun.
+# Run: `python demos/demo_tube.py [--out DIR] [--size 6] [--increments 16]`, also under mpirun.
 
 # %%
 import argparse
@@ -34,7 +34,7 @@ from comove_dolfinx import compat  # noqa: E402
 
 parser = argparse.ArgumentParser(description="a steel tube dented by a rigid transverse cylinder")
 parser.add_argument("--out", default="results/demo_tube")
-parser.add_argument("--size", type=float, default=5.0, help="element size away from the dent [mm]")
+parser.add_argument("--size", type=float, default=6.0, help="element size away from the dent [mm]")
 parser.add_argument("--increments", type=int, default=16, help="increments of the travel")
 args = parser.parse_args()
 out = pathlib.Path(args.out)
@@ -184,7 +184,7 @@ probes = [cm.Value("travel", lambda model: -tool.displacement(contact.factor)[1]
 # %% [markdown]
 # ## The run
 # The travel is taken in equal increments, each started from the tangent's prediction; Newton stops
-# when the out-of-balance force is below 1e-6 of the forces the tube carries (a tight tolerance:
+# when the out-of-balance force is below 1e-5 of the forces the tube carries (a tight tolerance:
 # the energy balance is checked to 1 %).
 
 # %%
@@ -192,7 +192,7 @@ if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 job = cm.Job(body, items, [cm.Step(args.increments)], probes,
              writers=[cm.VTK(out, overwrite=True), cm.HistoryCSV(out / "history.csv")],
-             newton=cm.NewtonSettings(rtol=1e-6, scale="force"))
+             newton=cm.NewtonSettings(rtol=1e-5, scale="force"))
 res = job.run(progress=comm.rank == 0)
 
 # %% [markdown]
@@ -229,7 +229,8 @@ if comm.rank == 0 and len(res):
            title=f"dent along the top line at travel {t[-1]:.2f} mm")
     fig.savefig(out / "tube.png", dpi=130)
     plt.close(fig)
-    print(f"dofs {job.model.num_dofs() if hasattr(job, 'model') else '?'}; force at travel "
+    print(f"{job.model.num_dofs()} dofs, {len(res)} increments, {int(np.sum(res['newton_its']))} Newton "
+          f"iterations; force at travel "
           f"{t[-1]:.3g} mm: {F[-1] / 1000:.3f} kN; dent depth {-profile['u_r'][0]:.4f} mm; "
           f"largest plastic strain {last['max_plastic_strain']:.4f}")
     print(f"energy [N mm]: W = {W:.2f}; elastic {last['elastic_energy']:.2f}, plastic "
