@@ -9,10 +9,12 @@ check claims, recomputed here from the recorded columns:
   the penalty's penetration.
 """
 import csv
+import pathlib
 
 import launch
 import pytest
-from test_new_demos import DEMOS
+
+DEMOS = pathlib.Path(__file__).resolve().parent.parent / "demos"
 
 
 def read_history(path):
