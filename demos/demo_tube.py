@@ -215,7 +215,8 @@ if len(res):
 
 # %% [markdown]
 # ## The chart
-# Left: the indenter's force on the whole tube against its travel. Right: the dent, the downward
+# Left: the indenter's force on the whole tube against its travel. Middle: the indenter's work
+# so far against the energy terms at each increment, stacked. Right: the dent, the downward
 # radial displacement of the outer surface along the top line, against the distance from the
 # indenter's plane, at the end of the travel. Under the indenter the wall is dented locally, within
 # about 20 mm; beyond, the whole section flattens a little (ovalises) and the tube bends as a beam
@@ -225,11 +226,20 @@ if len(res):
 
 # %%
 if comm.rank == 0 and len(res):
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    fig, (a1, a3, a2) = plt.subplots(1, 3, figsize=(15, 4.2), layout="constrained")
     a1.plot(t, F / 1000.0, "o-", ms=3, label="computed (J2, P2 tetrahedra)")
     a1.set(xlabel="indenter travel [mm]", ylabel="indenter force on the tube [kN]",
            title=f"force against travel (W = {W / 1000:.2f} J)")
     a1.legend(loc="upper left")
+    work = np.r_[0.0, np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(t))] / 1000.0
+    el, pl, fr = (np.r_[0.0, res[c]] / 1000.0 for c in ("elastic_energy", "plastic_dissipation",
+                                                        "friction_dissipation"))
+    a3.stackplot(t, el, pl, fr, labels=["elastic energy", "plastic dissipation", "friction dissipation"],
+                 alpha=0.6)
+    a3.plot(t, work, "k.-", ms=4, label="indenter's work (trapezoid)")
+    a3.set(xlabel="indenter travel [mm]", ylabel="energy [J]",
+           title=f"energy balance: sum - W = {100 * error:+.2f} % of W")
+    a3.legend(loc="upper left", fontsize=8)
     a2.plot(profile["z"], -profile["u_r"], ".-", ms=4)
     a2.axhline(0.0, color="grey", lw=0.6)
     a2.set(xlabel="z along the tube [mm]", ylabel="-u_r on the top line [mm]",
