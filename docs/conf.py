@@ -2,7 +2,7 @@
 
 The Markdown pages of docs/ are read by MyST; the API reference comes from the docstrings (autodoc,
 numpy style through napoleon; docs/reference/ is generated, one page per package); each demo (demos/demo_*.py, jupytext's percent format) is run once
-into docs/_build/demos/ and becomes a page with the pictures of that run (the demos take 5 to 20 s
+into docs/_build/demos/ and becomes a page with the pictures of that run (the demos take 5 to 60 s
 each; a demo whose script has not changed since its last successful run is not run again).
 """
 import os
