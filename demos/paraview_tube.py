@@ -26,20 +26,22 @@ shown.RescaleTransferFunctionToDataRange(True, False)
 shown.SetScalarBarVisibility(view, True)
 GetColorTransferFunction("plastic_strain_cell_avg").ApplyPreset("Viridis (matplotlib)", True)
 bar = GetScalarBar(GetColorTransferFunction("plastic_strain_cell_avg"), view)
-bar.Title = "equivalent plastic strain"
+bar.Title = "plastic strain"
 bar.ComponentTitle = ""
 bar.WindowLocation = "Any Location"
-bar.Position = [0.04, 0.25]
+bar.Position = [0.84, 0.2]
 bar.ScalarBarLength = 0.5
-bar.TitleFontSize = 14
-bar.LabelFontSize = 12
+bar.TitleFontSize = 8
+bar.LabelFontSize = 7
 bar.ScalarBarThickness = 12
 bar.TitleBold = 0
+bar.HorizontalTitle = 1
+bar.TextPosition = "Ticks left/bottom, annotations right/top"
 bar.LabelFormat = "%.2f"
 bar.RangeLabelFormat = "%.2f"
 Render(view)
-view.CameraPosition = [75.0, 60.0, -60.0]
-view.CameraFocalPoint = [0.0, 5.0, 15.0]
+view.CameraPosition = [48.0, 62.0, -38.0]
+view.CameraFocalPoint = [0.0, 18.0, 22.0]
 view.CameraViewUp = [0.0, 1.0, 0.0]
 view.CameraViewAngle = 45.0
 Render(view)
