@@ -29,10 +29,9 @@ lines and the clocks (process.py). Their public names are importable from here a
 """
 from __future__ import annotations
 
+import sys
 import time
 from typing import Callable
-
-from tqdm import tqdm
 
 from .deprecated import warn_renamed
 from .guards import PENETRATION_WARNING, check_workspace
@@ -96,9 +95,7 @@ class Job:
                 collective(model.comm, w.open, run)
         newton = Newton(model, self.newton, timer)
         run.newton = newton
-        # the bar on rank 0 and only on a terminal (disable=None): a log file gets the console's lines
-        bar = tqdm(total=len(self.steps), unit="step", disable=True if not progress or model.comm.rank != 0 else None,
-                   bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
+        bar = _progress_bar(len(self.steps), progress and model.comm.rank == 0)
         loop = IncrementLoop(self, run, res, newton, timer, resumed)
         try:
             with Interrupts(model.comm) as interrupts:      # (parallel.py)
@@ -153,6 +150,25 @@ class Job:
         res.warnings = list(run.warnings)
         for w in self.writers:
             collective(run.comm, w.close, run, res)
+
+
+class _NoBar:
+    """The progress bar where none is shown."""
+
+    def update(self, n: float) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _progress_bar(steps: int, wanted: bool):
+    """A bar over the steps, advanced by the load factor, if ``wanted`` (rank 0) and only on a
+    terminal: a log file gets the console's lines (and tqdm is not loaded for nothing)."""
+    if not wanted or not sys.stderr.isatty():
+        return _NoBar()
+    from tqdm import tqdm
+    return tqdm(total=steps, unit="step", bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
 
 
 def __getattr__(name: str):
