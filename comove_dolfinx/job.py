@@ -33,6 +33,7 @@ import sys
 import time
 from typing import Callable
 
+from . import startup
 from .deprecated import warn_renamed
 from .guards import PENETRATION_WARNING, check_workspace
 from .loop import IncrementLoop
@@ -87,10 +88,11 @@ class Job:
         """:meth:`run` itself: compile, start (or go on from ``restart``), open the writers, run the
         increment loop (loop.py), and finish, also after a failure or an interrupt."""
         t_start, before = time.perf_counter(), process_clock()[0]
-        timer = Timer()
-        model = self._compile(timer)
+        timer, first = Timer(), startup.claim()
+        with startup.part("setup and compilation"):
+            model = self._compile(timer)
         run, res, resumed = self._start(model, restart)
-        with timer("output"):
+        with timer("output"), startup.part("writers opened"):
             for w in self.writers:
                 collective(model.comm, w.open, run)
         newton = Newton(model, self.newton, timer)
@@ -100,6 +102,8 @@ class Job:
         try:
             with Interrupts(model.comm) as interrupts:      # (parallel.py)
                 newton.poll = interrupts.check
+                if first:                   # the process's start-up ends here (its timing print)
+                    res.startup = {**startup.PARTS, "total": startup.cpu_now()}
                 loop.steps(interrupts, bar)
         except KeyboardInterrupt as err:
             res.completed, res.interrupted = False, True

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 import pathlib
-from xml.sax.saxutils import quoteattr
+from html import escape
 
 import numpy as np
 
@@ -174,6 +174,6 @@ class VTK(Writer):
         # ring's 700 nodes) for files 2.2 times smaller
         _atomic_write(self.folder / fname, lambda p: vtu.write(p, self.points, self.cell_type, self.cells, point, cell))
         lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1">', "<Collection>"]
-        lines += [f'  <DataSet timestep="{t:.12g}" part="0" file={quoteattr(f)}/>' for t, f in self.steps]
+        lines += [f'  <DataSet timestep="{t:.12g}" part="0" file="{escape(f)}"/>' for t, f in self.steps]
         lines += ["</Collection>", "</VTKFile>", ""]
         _atomic_write(self.folder / f"{self.name}.pvd", lambda p: p.write_text("\n".join(lines)))

@@ -8,7 +8,7 @@ cell type, and float64 point and cell arrays. ParaView and meshio read the files
 """
 from __future__ import annotations
 
-from xml.sax.saxutils import quoteattr
+from html import escape
 
 import numpy as np
 
@@ -35,7 +35,7 @@ class _Appended:
 def _array(section: _Appended, name: str | None, array: np.ndarray) -> str:
     """The DataArray element of ``array`` (float64, int64 or uint8; 1 or 2 dimensions)."""
     kind = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("u1"): "UInt8"}[array.dtype]
-    label = f" Name={quoteattr(name)}" if name is not None else ""
+    label = f' Name="{escape(name)}"' if name is not None else ""
     if array.ndim == 2:
         label += f' NumberOfComponents="{array.shape[1]}"'
     return f'<DataArray type="{kind}"{label} format="appended" offset="{section.add(array)}"/>'

@@ -110,7 +110,7 @@ class RunInfo(Writer):
                         failed_its=results.failed_its, failures=dict(results.failures),
                         cutbacks=results.cutbacks, retries=results.retries, advice=results.advice,
                         dofs=results.dofs, wall_s=results.wall_s,
-                        timing=results.timing, process=results.process, **results.contact)
+                        timing=results.timing, process=results.process, startup=results.startup, **results.contact)
         return json.dumps(info, indent=1, default=str)
 
     def open(self, run) -> None:
