@@ -87,9 +87,11 @@ __getattr__, __dir__ = lazy_names(__name__, _WHERE, globals())
 
 def check_platform() -> None:
     """Fail with a clear message unless a supported dolfinx (0.5, 0.9, 0.11) and gmsh are importable."""
+    import importlib.util
     try:
         import dolfinx  # noqa: F401
-        import gmsh  # noqa: F401
+        if importlib.util.find_spec("gmsh") is None:     # (found, not imported: gmsh_session.py)
+            raise ModuleNotFoundError("No module named 'gmsh'")
     except ModuleNotFoundError as err:
         raise SystemExit(
             f"comove_dolfinx needs dolfinx and gmsh ({err}). On Debian they serve /usr/bin/python3 "

@@ -60,7 +60,7 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
 
     from mpi4py import MPI
 
-    from . import command_signals
+    from . import command_signals, startup
     from .io import VTK, Console, HistoryCSV, RunInfo
     from .io import restart as restarts
     from .io.checkpoint import Checkpoint
@@ -71,7 +71,8 @@ def run_scene(scene, out_dir, comm=None, progress: bool = False, newton=None, ov
     identity = restarts.scene_identity(scene)
     point = restarts.restart_point(out, identity, allow, scene, comm) if restart else None
     with RunFolder(out, overwrite, comm, restart):
-        md = scene.mesh_data(comm)
+        with startup.part("mesh"):
+            md = scene.mesh_data(comm)
         # the dataset before its history row: a kill between them leaves no row without dataset
         writers = [VTK(out, fibres=scene.fibres()), HistoryCSV(out / "history.csv"),
                    RunInfo(out / "run.json", {"scene": scene.name, **dataclasses.asdict(scene)},
@@ -188,6 +189,8 @@ def main(argv=None) -> int:
     has returned, while the process shuts MPI and PETSc down."""
     from . import command_signals as cs
     previous, hook = cs.handle(), sys.unraisablehook
+    from . import startup
+    startup.begin()                      # (the CPU seconds so far: the interpreter's start)
     cs.SIGNALLED.clear()
     sys.unraisablehook = cs.quiet_after_signal
     parsed: list = []                    # the parsed arguments, once they are
@@ -253,24 +256,22 @@ def _parser():
 
 
 def _main(argv, parsed: list) -> int:
-    parser = _parser()
-    args = parser.parse_args(argv)
-    parsed.append(args)
-    if args.command == "study":
-        return _study(args)
-    if args.command == "verify":
-        return _verify(args)
-    if args.command == "run":
-        err = _check_early(args)
-        if err is not None:
-            if _rank() == 0:
-                print(f"comove: {err}", file=sys.stderr)
-            return 2
-    _quiet_jit()
-    from . import check_platform, command_signals
-    command_signals.own_signals()
-    command_signals.import_bindings()   # (gmsh's and dolfinx's imports cannot take a signal)
-    check_platform()
+    from . import startup
+    with startup.part("arguments and checks"):
+        parser = _parser()
+        args = parser.parse_args(argv)
+        parsed.append(args)
+        if args.command == "study":
+            return _study(args)
+        if args.command == "verify":
+            return _verify(args)
+        err = _check_early(args) if args.command == "run" else None
+    if err is not None:
+        if _rank() == 0:
+            print(f"comove: {err}", file=sys.stderr)
+        return 2
+    with startup.part("imports"):
+        _import(args.command == "run")
     if args.command == "scenes":
         try:
             code = _scenes()
@@ -281,6 +282,20 @@ def _main(argv, parsed: list) -> int:
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return 0
     return _run(args)
+
+
+def _import(run: bool) -> None:
+    """dolfinx (with the signals held: its bindings cannot take one while they load), the platform
+    checked, and for a run the package's modules it uses."""
+    _quiet_jit()
+    from . import check_platform, command_signals, startup
+    command_signals.own_signals()
+    with startup.versions_without_pkg_resources():
+        command_signals.import_bindings()
+    check_platform()
+    if run:
+        from . import geometry, job  # noqa: F401
+        from .io import checkpoint, vtk, writers  # noqa: F401
 
 
 def _study(args) -> int:

@@ -9,8 +9,9 @@ ones are recorded, so that the writers' closing and the output folder's last wor
 io/folder.py) are not cut short.
 
 Gmsh's Python module sets Ctrl-C to the system's default action when it is imported (the process
-would die without a word), and dolfinx's compiled bindings abort the process if a signal's
-exception is raised while they initialise: the command imports both with the signals held back
+would die without a word): it is imported, when a mesh is built, with the signals held back
+(geometry/gmsh_session.py). Dolfinx's compiled bindings abort the process if a signal's exception
+is raised while they initialise: the command imports them with the signals held back
 (:func:`signals_held`, :func:`import_bindings`) and installs its handler again after. Under Open
 MPI's ``mpirun``, Ctrl-C reaches the ranks as SIGTERM, and ``mpirun`` itself ends with its own
 exit code (1).
@@ -71,18 +72,18 @@ def signals_held():
 
 
 def import_bindings() -> None:
-    """Import gmsh and dolfinx with the signals held back: gmsh's import sets Ctrl-C to the
-    system's default (the module docstring), and a KeyboardInterrupt raised while dolfinx's
-    compiled bindings initialise aborts the process (nanobind's module set-up, dolfinx 0.10 and
-    later: SIGSEGV or std::terminate). A signal that came meanwhile is handled once they are
-    loaded. If one is missing, the platform check says so later."""
+    """Import dolfinx with the signals held back: a KeyboardInterrupt raised while its compiled
+    bindings initialise aborts the process (nanobind's module set-up, dolfinx 0.10 and later:
+    SIGSEGV or std::terminate). A signal that came meanwhile is handled once they are loaded. If
+    dolfinx is missing, the platform check says so later. Gmsh is not imported here: a run whose
+    mesh is in the cache never loads it, and its import, when a mesh is built, holds the signals
+    itself (geometry/gmsh_session.py)."""
     import importlib
     with signals_held():
-        for name in ("gmsh", "dolfinx"):
-            try:
-                importlib.import_module(name)
-            except ImportError:
-                pass
+        try:
+            importlib.import_module("dolfinx")
+        except ImportError:
+            pass
 
 
 def writer():

@@ -7,7 +7,7 @@ comove_dolfinx runs on three API levels, chosen at import time from ``dolfinx.__
 * 0.9  (Debian 13's python3-dolfinx-real 0.9.0): basix.ufl elements and ``fem.functionspace``,
   ``x.petsc_vec``, ``jit_options``, ``Expression.eval(mesh, cells)``, ``alpha=``, 2-D dofmap arrays;
 * 0.11 (the current release; the PyPI wheel dolfinx-solver-real): as 0.9, and ``dolfinx.io.gmsh``
-  whose ``model_to_mesh`` returns a named tuple.
+  whose ``model_to_mesh`` returns a named tuple; ``create_mesh(comm, cells, element, x)``.
 
 Nothing else in the package touches these APIs or a private attribute. The differences were found by
 running the test suite on each level (facts listed per function).
@@ -274,21 +274,15 @@ def model_to_mesh(model, comm, rank: int, gdim: int = 2):
     return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
 
 
-# ------------------------------------------------------------------------------------------------
-# dolfinx's own Newton solver (the benchmarks' reference: what a user writes without this package)
-# ------------------------------------------------------------------------------------------------
+# -- dolfinx's own Newton solver (the benchmarks' reference: what a user writes without this package)
 def plain_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str = "plain_",
                  monitor=None):
-    """A solve function for ``F(u; v) = 0`` by dolfinx's own Newton solver, set up as its demos do:
-    converged when the correction's norm falls below ``rtol`` times the first correction's (up to
-    0.9, the "incremental" criterion) or below ``rtol`` times the solution's (SNES's step test,
-    from 0.10; also its residual test at ``rtol``), the linear solver from ``petsc_options`` (keys
-    without a prefix). Calling the function solves from the current ``u`` and returns
-    (iterations, converged). ``monitor``: called with the norm of each residual Newton evaluates.
-
-    Up to 0.9 it is ``fem.petsc.NonlinearProblem`` with ``nls.petsc.NewtonSolver`` (its KSP's options
-    under ``prefix``); from 0.10, where that pair is deprecated, the new ``NonlinearProblem`` on
-    PETSc's SNES (``newtonls`` without a line search, its options under ``prefix``)."""
+    """A solve function for ``F(u; v) = 0`` by dolfinx's own Newton solver as its demos set it up:
+    up to 0.9 ``fem.petsc.NonlinearProblem`` with ``nls.petsc.NewtonSolver`` (the "incremental"
+    criterion: correction below ``rtol`` times the first), from 0.10 the new ``NonlinearProblem`` on
+    SNES (``newtonls`` without a line search; step and residual tests at ``rtol``); the linear solver
+    from ``petsc_options`` (keys without ``prefix``). Calling it solves from the current ``u`` and
+    returns (iterations, converged); ``monitor`` gets the norm of each residual evaluated."""
     if VERSION >= (0, 10):
         return _snes_newton(F, u, bcs, J, petsc_options, rtol, prefix, monitor)
     from dolfinx.nls.petsc import NewtonSolver
@@ -338,3 +332,68 @@ def _snes_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str, mo
         return int(snes.getIterationNumber()), snes.getConvergedReason() > 0
     solve.keep = (problem,)
     return solve
+
+
+_GMSH_CELLS = {2: ("triangle", 1), 9: ("triangle", 2), 3: ("quadrilateral", 1), 10: ("quadrilateral", 2),
+               4: ("tetrahedron", 1), 11: ("tetrahedron", 2)}
+"""Gmsh's element type -> (cell, degree) of the cells that comove_dolfinx reads."""
+
+
+def mesh_from_gmsh_arrays(comm, gmsh_type: int, x: np.ndarray, cells: np.ndarray, cell_values: np.ndarray,
+                          facets: np.ndarray | None, facet_values: np.ndarray | None, gdim: int):
+    """(mesh, cell tags, facet tags) from the arrays of a gmsh mesh held by one rank, as
+    :func:`model_to_mesh` makes them from the gmsh model itself, without gmsh: the nodes ``x``
+    (n, 3) in the order of their gmsh tags, the cells (gmsh's element type ``gmsh_type``; gmsh's
+    node order, numbered from 0) and the facets of the physical groups with their group tags. The
+    other ranks pass empty arrays (0 rows; ``facets`` None on every rank when there are no facet
+    groups). The mesh is distributed as that function distributes it: the same partition."""
+    shape, degree = _GMSH_CELLS[gmsh_type]
+    ctype = dolfinx.cpp.mesh.to_type(shape)
+    perm = dolfinx.cpp.io.perm_gmsh
+    ordered = cells[:, perm(ctype, cells.shape[1])].copy()       # dolfinx's node order
+    if _OLD:
+        cell = ufl.Cell(shape, geometric_dimension=gdim)
+        domain = ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, degree, variant="equispaced")))
+        mesh = dolfinx.mesh.create_mesh(comm, ordered, x[:, :gdim], domain)
+    else:
+        domain = _gmsh_reader().ufl_mesh(gmsh_type, gdim, dtype=dolfinx.default_real_type)
+        x = x[:, :gdim].astype(dolfinx.default_real_type, copy=False)
+        if VERSION >= (0, 10):
+            mesh = dolfinx.mesh.create_mesh(comm, ordered, domain, x)
+        else:
+            mesh = dolfinx.mesh.create_mesh(comm, ordered, x, domain)
+    tdim = mesh.topology.dim
+    if facets is not None and VERSION < (0, 10):   # (0.10 on: tags take the nodes in gmsh's order)
+        facets = facets[:, perm(dolfinx.cpp.mesh.cell_entity_type(ctype, tdim - 1, 0), facets.shape[1])]
+    cell_tags = _tags(mesh, tdim, ordered if VERSION < (0, 10) else cells, cell_values)
+    if facets is None:
+        facet_tags = dolfinx.mesh.meshtags(mesh, tdim - 1, np.empty(0, np.int32), np.empty(0, np.int32))
+    else:
+        facet_tags = _tags(mesh, tdim - 1, facets, facet_values)
+    return mesh, cell_tags, facet_tags
+
+
+def _gmsh_reader():
+    """dolfinx's gmsh module (0.9: ``dolfinx.io.gmshio``, from 0.10 ``dolfinx.io.gmsh``), which
+    imports gmsh only in its file reader."""
+    if VERSION >= (0, 10):
+        from dolfinx.io import gmsh as reader
+    else:
+        from dolfinx.io import gmshio as reader
+    return reader
+
+
+def _tags(mesh, dim: int, entities: np.ndarray, values: np.ndarray):
+    """Mesh tags of the entities of dimension ``dim`` given by their nodes (input numbering)."""
+    if _OLD:
+        local, local_values = dolfinx.cpp.io.distribute_entity_data(mesh._mesh, dim, entities, values)
+    else:
+        from dolfinx.io import distribute_entity_data
+        local, local_values = distribute_entity_data(mesh, dim, entities, values)
+    mesh.topology.create_connectivity(dim, 0 if dim == mesh.topology.dim else mesh.topology.dim)
+    if VERSION >= (0, 10):
+        from dolfinx.graph import adjacencylist
+        adjacency = adjacencylist(local)
+    else:
+        adjacency = dolfinx.cpp.graph.AdjacencyList_int32(local)
+    return dolfinx.mesh.meshtags_from_entities(mesh, dim, adjacency, local_values.astype(np.int32, copy=False))

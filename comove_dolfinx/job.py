@@ -29,11 +29,11 @@ lines and the clocks (process.py). Their public names are importable from here a
 """
 from __future__ import annotations
 
+import sys
 import time
 from typing import Callable
 
-from tqdm import tqdm
-
+from . import startup
 from .deprecated import warn_renamed
 from .guards import PENETRATION_WARNING, check_workspace
 from .loop import IncrementLoop
@@ -88,21 +88,22 @@ class Job:
         """:meth:`run` itself: compile, start (or go on from ``restart``), open the writers, run the
         increment loop (loop.py), and finish, also after a failure or an interrupt."""
         t_start, before = time.perf_counter(), process_clock()[0]
-        timer = Timer()
-        model = self._compile(timer)
+        timer, first = Timer(), startup.claim()
+        with startup.part("setup and compilation"):
+            model = self._compile(timer)
         run, res, resumed = self._start(model, restart)
-        with timer("output"):
+        with timer("output"), startup.part("writers opened"):
             for w in self.writers:
                 collective(model.comm, w.open, run)
         newton = Newton(model, self.newton, timer)
         run.newton = newton
-        # the bar on rank 0 and only on a terminal (disable=None): a log file gets the console's lines
-        bar = tqdm(total=len(self.steps), unit="step", disable=True if not progress or model.comm.rank != 0 else None,
-                   bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
+        bar = _progress_bar(len(self.steps), progress and model.comm.rank == 0)
         loop = IncrementLoop(self, run, res, newton, timer, resumed)
         try:
             with Interrupts(model.comm) as interrupts:      # (parallel.py)
                 newton.poll = interrupts.check
+                if first:                   # the process's start-up ends here (its timing print)
+                    res.startup = {**startup.PARTS, "total": startup.cpu_now()}
                 loop.steps(interrupts, bar)
         except KeyboardInterrupt as err:
             res.completed, res.interrupted = False, True
@@ -153,6 +154,25 @@ class Job:
         res.warnings = list(run.warnings)
         for w in self.writers:
             collective(run.comm, w.close, run, res)
+
+
+class _NoBar:
+    """The progress bar where none is shown."""
+
+    def update(self, n: float) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _progress_bar(steps: int, wanted: bool):
+    """A bar over the steps, advanced by the load factor, if ``wanted`` (rank 0) and only on a
+    terminal: a log file gets the console's lines (and tqdm is not loaded for nothing)."""
+    if not wanted or not sys.stderr.isatty():
+        return _NoBar()
+    from tqdm import tqdm
+    return tqdm(total=steps, unit="step", bar_format="{l_bar}{bar}| {n:.3f}/{total:.0f} [{elapsed}<{remaining}]")
 
 
 def __getattr__(name: str):

@@ -72,7 +72,8 @@ _IMPORTED = time.perf_counter()
 def account(results, timer: Timer, before: float) -> None:
     """Put the timing of the whole process into ``results`` (a job's Results): what came before the
     run (start-up, imports, mesh: ``before`` wall seconds), the parts the run timed (``timer``), the
-    rest of the run; and the process's wall and CPU seconds."""
+    rest of the run; and the process's wall and CPU seconds. For the process's first job, the
+    start-up's CPU seconds per part (``results.startup``, startup.py) and their line."""
     wall, cpu, compiler = process_clock()
     parts = {"before the run (start-up, imports, mesh)": before, **timer.totals}
     parts["other"] = max(results.wall_s - sum(timer.totals.values()), 0.0)
@@ -82,3 +83,16 @@ def account(results, timer: Timer, before: float) -> None:
     results.process = {"wall_s": wall, "cpu_s": cpu, "compiler_cpu_s": compiler}
     results.timing_report = (f"{report.report()}\nprocess: wall {wall:.2f} s, CPU {cpu + compiler:.2f} s "
                              f"({compiler:.2f} s of it in the C compiler)")
+    if results.startup:
+        parts = {k: v for k, v in results.startup.items() if k != "total"}
+        parts["other"] = max(results.startup["total"] - sum(parts.values()), 0.0)
+        results.startup = {**parts, "total": results.startup["total"]}
+        results.timing_report += "\n" + startup_line(parts, results.startup["total"], cpu + compiler)
+
+
+def startup_line(parts: dict, before: float, total: float) -> str:
+    """The timing print's start-up line: the CPU seconds before the first increment (``before``, in
+    ``parts``), their share of the process's (``total``)."""
+    share = 100.0 * before / total if total > 0 else 0.0
+    listed = ", ".join(f"{k} {v:.2f} s" for k, v in parts.items())
+    return f"start-up (before the first increment): CPU {before:.2f} s of {total:.2f} s ({share:.0f} %): {listed}"

@@ -29,6 +29,8 @@ class Results:
     dofs: int = 0
     timing: dict = field(default_factory=dict)      # wall seconds per part of the whole process
     timing_report: str = ""
+    startup: dict = field(default_factory=dict)     # CPU seconds before the first increment, per part
+                                                    # and "total" (the process's first job only)
     process: dict = field(default_factory=dict)     # wall_s, cpu_s, compiler_cpu_s of the process
     contact: dict = field(default_factory=dict)
     interrupted: bool = False       # by a signal or Ctrl-C (the exception goes on after the writers)

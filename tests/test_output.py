@@ -180,3 +180,25 @@ def test_xdmf_contact_pressure_is_the_contact_law(tmp_path):
     assert bottom.sum() == 17                               # 8 P2 edges: 9 vertices + 8 mid-nodes
     np.testing.assert_allclose(p[bottom], q, rtol=1e-8)
     assert np.abs(p[~bottom]).max() < 1e-12 * q             # zero up to the writer's round-off
+
+
+def test_vtu_files_read_back_with_meshio(tmp_path):
+    """The .vtu writer's files, read by meshio (an independent reader): the points, the quadratic
+    triangles and every point and cell array bit for bit, with meshio's shapes ((n,) for a scalar
+    cell array, (n, 1) for a one-column point array); two files of one grid keep their own fields."""
+    import meshio
+
+    from comove_dolfinx.io import vtu
+    rng = np.random.default_rng(1)
+    points, cells = rng.random((40, 3)), rng.integers(0, 40, (12, 6))
+    grid = vtu.Grid(points, "triangle6", cells)
+    for k in range(2):
+        point = {"displacement": rng.random((40, 3)), "contact_pressure": rng.random((40, 1))}
+        cell = {"cauchy_stress_cell_avg": rng.random((12, 9)), "von_mises_cell_avg": rng.random(12)}
+        grid.write(tmp_path / f"r{k}.vtu", point, cell)
+        m = meshio.read(tmp_path / f"r{k}.vtu")
+        assert np.array_equal(m.points, points) and np.array_equal(m.cells_dict["triangle6"], cells)
+        for name, v in point.items():
+            assert m.point_data[name].shape == v.shape and np.array_equal(m.point_data[name], v)
+        for name, v in cell.items():
+            assert m.cell_data[name][0].shape == v.shape and np.array_equal(m.cell_data[name][0], v)

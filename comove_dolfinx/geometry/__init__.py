@@ -13,7 +13,9 @@ part; their tag values, distinct per name and numbered from 1 in the order liste
 
 Caching: rank 0 builds the mesh once and writes ``<cache_dir>/<builder>_<hash>.msh``, where the hash
 covers every parameter (order included) and the gmsh version; the file is written under a temporary name
-and renamed, so a concurrent reader never sees half a file. Later calls, in any process, reuse the file.
+and renamed, so a concurrent reader never sees half a file. Later calls, in any process, reuse the file,
+through its arrays (``<builder>_<hash>.npz`` beside it, mesh_arrays.py): a mesh in the cache is read
+without gmsh, which is imported only to build a mesh (or to read a cached one the first time).
 
 Gmsh runs on rank 0 only: the builders call ``gmsh.initialize``/``gmsh.finalize`` there, so do not call
 them from inside a gmsh session of your own. For a session of your own (meshing a .geo script, as

@@ -1,4 +1,10 @@
-"""Mesh data with named boundaries: reading .msh files, wrapping dolfinx meshes, the builders' cache."""
+"""Mesh data with named boundaries: reading .msh files, wrapping dolfinx meshes, the builders' cache.
+
+The builders' cache holds, beside each ``<builder>_<hash>.msh``, its arrays (``.npz``: the nodes, the
+cells and facets of the physical groups with their tags, the groups' names), which a later run
+reads with NumPy and hands to dolfinx as its gmsh reader would: a run whose mesh is in the cache
+never loads gmsh.
+"""
 from __future__ import annotations
 
 import hashlib
@@ -13,9 +19,11 @@ import numpy as np
 from mpi4py import MPI
 
 from .. import compat
+from . import mesh_arrays
 from .gmsh_session import gmsh
 from .gmsh_session import start as _start_gmsh
 from .gmsh_session import stop as _stop_gmsh
+from .gmsh_session import version as _gmsh_version
 
 BODY_TAG = 1
 """Cell tag value of the physical surface "body" written by every builder."""
@@ -72,7 +80,7 @@ def fix_coordinate_element(mesh: dolfinx.mesh.Mesh) -> None:
 
 def _cache_path(builder: str, params: dict, cache_dir: str | os.PathLike) -> pathlib.Path:
     """File name <builder>_<10-hex hash of parameters, gmsh version and cache format>.msh."""
-    key = json.dumps({"builder": builder, "params": params, "gmsh": gmsh.__version__,
+    key = json.dumps({"builder": builder, "params": params, "gmsh": _gmsh_version(),
                       "format": _CACHE_FORMAT}, sort_keys=True)
     digest = hashlib.sha1(key.encode()).hexdigest()[:10]
     return pathlib.Path(cache_dir) / f"{builder}_{digest}.msh"
@@ -92,31 +100,44 @@ def build_cached(builder: str, params: dict, construct: Callable[[], None], comm
     gmsh model (and synchronizes); this function meshes it, raises its order (``params["order"]``)
     and writes the file under a temporary name, renamed into place. A gmsh failure on rank 0 is
     raised on every rank (MeshError). The builders of this package and the verification cases'
-    meshes use it. ``dim``: the dimension meshed, 2 (triangles) or 3 (tetrahedra).
+    meshes use it. ``dim``: the dimension meshed, 2 (triangles) or 3 (tetrahedra). The mesh's
+    arrays are read from the ``.npz`` beside the ``.msh`` (written at the first read, with gmsh),
+    so that gmsh is loaded only to build a mesh or to read one the first time.
     """
     path = _cache_path(builder, params, cache_dir)
     error = None
     if comm.rank == 0 and not path.exists():
-        tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.msh")  # gmsh wants the .msh suffix
-        _start_gmsh()
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            gmsh.model.add(builder)
-            construct()
-            gmsh.model.mesh.generate(dim)
-            gmsh.model.mesh.setOrder(params["order"])  # order 2: new nodes on the true curves
-            gmsh.write(str(tmp))
-            os.replace(tmp, path)
-        except Exception as err:  # gmsh raises plain Exception
-            error = f"building {path} with gmsh failed: {err}"
-        finally:
-            _stop_gmsh()
-            if tmp.exists():
-                tmp.unlink()
+        error = _build(builder, params, construct, path, dim)
     error = comm.bcast(error, root=0)  # also the barrier: no rank reads before the file exists
     if error is not None:
         raise MeshError(error)
-    return load_msh(path, comm)
+    arrays = mesh_arrays.read(path) if comm.rank == 0 else None
+    if comm.rank == 0 and arrays is None:
+        arrays, error = _arrays_with_gmsh(path, ())
+        if error is None:
+            mesh_arrays.write(path, arrays)
+    return _distribute(path, arrays, error, comm)
+
+
+def _build(builder: str, params: dict, construct: Callable[[], None], path: pathlib.Path, dim: int):
+    """Mesh the model that ``construct`` makes and write it to ``path`` (rank 0); the error, or None."""
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.msh")  # gmsh wants the .msh suffix
+    _start_gmsh()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        gmsh.model.add(builder)
+        construct()
+        gmsh.model.mesh.generate(dim)
+        gmsh.model.mesh.setOrder(params["order"])  # order 2: new nodes on the true curves
+        gmsh.write(str(tmp))
+        os.replace(tmp, path)
+    except Exception as err:  # gmsh raises plain Exception
+        return f"building {path} with gmsh failed: {err}"
+    finally:
+        _stop_gmsh()
+        if tmp.exists():
+            tmp.unlink()
+    return None
 
 
 def _groups_of_current_model(path: pathlib.Path, required: Iterable[str]) -> tuple[dict, dict, int]:
@@ -151,6 +172,49 @@ def _groups_of_current_model(path: pathlib.Path, required: Iterable[str]) -> tup
         raise MeshError(f"{path}: facet group(s) {missing} not found; present: {sorted(names[top - 1])}. "
                         "Add them as named physical curves (surfaces in 3D) or fix the names asked for")
     return names[top - 1], names[top], top
+
+
+def _arrays_with_gmsh(path: pathlib.Path, required: Iterable[str]) -> tuple[dict | None, str | None]:
+    """(the arrays of the .msh file, None) read with gmsh on this rank, or (None, the error)."""
+    _start_gmsh()
+    try:
+        gmsh.model.add("comove_load")
+        gmsh.merge(str(path))
+        facet_names, cell_names, dim = _groups_of_current_model(path, required)
+        return mesh_arrays.from_model(gmsh, dim, facet_names, cell_names), None
+    except MeshError as err:
+        return None, str(err)
+    except Exception as err:  # gmsh raises plain Exception
+        return None, f"gmsh cannot read {path}: {err}"
+    finally:
+        _stop_gmsh()
+
+
+def _distribute(path: pathlib.Path, arrays: dict | None, error: str | None, comm: MPI.Comm) -> MeshData:
+    """The mesh of the arrays that rank 0 holds (mesh_arrays.py), distributed over ``comm`` as
+    dolfinx's gmsh reader distributes it; MeshError on every rank if rank 0 has ``error``."""
+    head = None
+    if comm.rank == 0 and error is None:
+        head = {k: (arrays[k].shape[1] if arrays[k].ndim == 2 else int(arrays[k])) for k in
+                ("dim", "cells", "cells_type", "facets", "facets_type") if k in arrays}
+        head["names"] = mesh_arrays.names(arrays)
+    error, head = comm.bcast((error, head), root=0)
+    if error is not None:
+        raise MeshError(error)
+    if comm.rank != 0:
+        arrays = {"x": np.empty((0, 3)), "cells": np.empty((0, head["cells"]), dtype=np.int64),
+                  "cells_values": np.empty(0, dtype=np.int32)}
+        if "facets" in head:
+            arrays.update(facets=np.empty((0, head["facets"]), dtype=np.int64),
+                          facets_values=np.empty(0, dtype=np.int32))
+    mesh, cell_tags, facet_tags = compat.mesh_from_gmsh_arrays(
+        comm, head["cells_type"], arrays["x"], arrays["cells"], arrays["cells_values"],
+        arrays.get("facets"), arrays.get("facets_values"), gdim=head["dim"])
+    fix_coordinate_element(mesh)
+    mesh.name = "mesh"
+    cell_tags.name, facet_tags.name = "cell_tags", "facet_tags"
+    facet_names, cell_names = head["names"]
+    return MeshData(mesh, cell_tags, facet_tags, facet_names, path, cell_names)
 
 
 def load_msh(path: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD,

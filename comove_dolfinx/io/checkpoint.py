@@ -109,6 +109,7 @@ class Checkpoint(Writer):
         self.count = len(run.resumed_rows)
         self._prev, self._ranks = None, run.comm.size
         self._pending, self._saved_at = None, time.perf_counter()
+        self._coords = {}                    # the entries' reference coordinates, per kind (fixed)
 
     def write(self, run, row, increment) -> None:
         self.count += 1
@@ -130,7 +131,7 @@ class Checkpoint(Writer):
         (the rows grow with the run: text at every increment would cost quadratic time)."""
         comm = run.comm
         m, solver, newton = run.model, run.solver, run.newton
-        arrays, kinds, coords = {}, {}, {}
+        arrays, kinds, coords = {}, {}, self._coords
 
         def put(name, value):
             if isinstance(value, tuple):              # (kind, local array): owned entries, keyed by position

@@ -5,10 +5,10 @@ import csv
 import json
 import os
 import pathlib
+import sys
 import time
 
 import numpy as np
-from tqdm import tqdm
 
 from ..parallel import on_root
 
@@ -110,7 +110,7 @@ class RunInfo(Writer):
                         failed_its=results.failed_its, failures=dict(results.failures),
                         cutbacks=results.cutbacks, retries=results.retries, advice=results.advice,
                         dofs=results.dofs, wall_s=results.wall_s,
-                        timing=results.timing, process=results.process, **results.contact)
+                        timing=results.timing, process=results.process, startup=results.startup, **results.contact)
         return json.dumps(info, indent=1, default=str)
 
     def open(self, run) -> None:
@@ -144,7 +144,11 @@ class Console(Writer):
 
     def _print(self, run, text: str) -> None:
         if run.comm.rank == 0:
-            tqdm.write(text)
+            bars = sys.modules.get("tqdm")      # a progress bar shown (job.py): its write keeps it whole
+            if bars is not None:
+                bars.tqdm.write(text)
+            else:
+                sys.stdout.write(f"{text}\n")
 
     def open(self, run) -> None:
         m = run.model
