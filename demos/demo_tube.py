@@ -24,9 +24,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from mpi4py import MPI  # noqa: E402  (MPI before dolfinx: the PyPI wheel of dolfinx needs it so)
 import ufl  # noqa: E402
 from dolfinx import fem  # noqa: E402
-from mpi4py import MPI  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
 import comove_dolfinx as cm  # noqa: E402
