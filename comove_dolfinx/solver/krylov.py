@@ -55,7 +55,7 @@ HYPRE = {**_GMRES, "pc_type": "hypre", "pc_hypre_type": "boomeramg",
 PRESETS = {"mumps": {}, "gamg": GAMG, "hypre": HYPRE}
 #: "auto" takes GAMG from this many dofs on (per dimension of the body; None: MUMPS at every size).
 #: 2-D: MUMPS was faster per Newton iteration at every size measured (docs/performance.md, the
-#: iterative solvers); 3-D: not yet measured, MUMPS until it is.
+#: iterative solvers); 3-D: MUMPS up to 230k dofs at least (the same section, "3D bodies").
 AUTO_DOFS = {2: None, 3: None}
 
 
