@@ -132,3 +132,16 @@ def test_the_deprecated_cost_module_forwards_with_a_warning():
     assert p.returncode == 2
     assert any("DeprecationWarning" in line and "python -m comove_dolfinx.benchmarks" in line for line in err)
     assert err[-1].startswith("python -m comove_dolfinx.cost: error: ") and "predictor = 'bogus'" in err[-1]
+
+
+def test_solid_study_runs_the_bent_block_with_each_solver(tmp_path):
+    """The 3D study on a coarse block: a row per linear solver in solid.csv, Krylov iterations for
+    GAMG only, the run completed by both, and GAMG at its default tolerance within 20 % of MUMPS's
+    Newton iterations (the linear error does not change Newton's path)."""
+    from comove_dolfinx.benchmarks.solid3d import solid
+    solid(tmp_path, sizes=(0.5,), names=("gamg", "mumps"), repeats=1)
+    rows = {r["solver"]: r for r in read_table(tmp_path / "solid.csv")}
+    assert set(rows) == {"gamg", "mumps"}
+    assert float(rows["gamg"]["krylov_per_solve"]) > 1.0 and float(rows["mumps"]["krylov_per_solve"]) == 0.0
+    assert all(float(r["completed_to"]) == 1.0 for r in rows.values())
+    assert float(rows["gamg"]["newton_its"]) <= 1.2 * float(rows["mumps"]["newton_its"])

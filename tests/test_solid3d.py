@@ -11,9 +11,10 @@ from comove_dolfinx.mechanics.body import Body, BodyError
 from comove_dolfinx.mechanics.material_data import Elastic, Hardening
 from comove_dolfinx.mechanics.materials import J2, as_material
 from comove_dolfinx.mechanics.model import Model
-from comove_dolfinx.probes import NodeDisplacement, ProbeError, Reaction
+from comove_dolfinx.probes import NodeDisplacement, ProbeError
 from comove_dolfinx.solver import IncrementalSolver, NewtonSettings, StepSettings
 from comove_dolfinx.taylor import taylor_test
+from states import one_correction_into
 
 HARDENING = Hardening((0.0, 0.05, 0.2), (15.0, 20.0, 22.0))     # yields at 1.5 % strain (E = 1000)
 SATURATION = Hardening.saturation(15.0, 10.0, 10.0, 20.0)
@@ -93,16 +94,7 @@ def _state(cache, update="sr_log", law=None, extra=None):
         items.append(PointLoad((1.0, 0.5, 0.25), (-1.0, -2.0, 1.0)))
     m = Model(Body(md, "solid", material, update=update), items)
     m.finalize()
-    solver = IncrementalSolver(m, StepSettings(n_increments=2, t_end=0.4))
-    res = solver.run()
-    assert res.completed, res.message
-    m.set_load(0.6)
-    newton = solver.newton
-    newton.residual()
-    compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs)
-    assert newton._solve_linear() is None
-    m.u.x.array[:] += m.du.x.array
-    m.evaluate_stress()
+    one_correction_into(m)
     return m
 
 

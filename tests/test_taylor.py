@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from comove_dolfinx import compat, geometry
+from comove_dolfinx import geometry
 from comove_dolfinx.contact import Circle, Contact, Plane, Profile
 from comove_dolfinx.loads import BodyForce, Displacement, Fixed, PointLoad, Pressure, Traction
 from comove_dolfinx.mechanics.body import Body
@@ -23,6 +23,7 @@ from comove_dolfinx.mechanics.materials import as_material
 from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, StepSettings
 from comove_dolfinx.taylor import taylor_test
+from states import one_correction_into
 
 HARDENING = Hardening((0.0, 0.05, 0.2), (15.0, 20.0, 22.0))     # yields at 1.5 % strain (E = 1000)
 # law "j2_saturation": J2 with sigma_y = 15 + 10 p + 10 (1 - exp(-20 p)), the Newton iteration of the
@@ -90,16 +91,7 @@ def _state(meshes, kind="plane_strain", update="sr", law=None, method="penalty",
         items.append(c)
     m = Model(Body(meshes[x0], kind, material, update=update), items)
     m.finalize(compiled_return=compiled)
-    solver = IncrementalSolver(m, StepSettings(n_increments=2, t_end=0.4))
-    res = solver.run()
-    assert res.completed, res.message
-    m.set_load(0.6)                                  # the next increment: one Newton correction
-    newton = solver.newton
-    newton.residual()
-    compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs)
-    assert newton._solve_linear() is None
-    m.u.x.array[:] += m.du.x.array
-    m.evaluate_stress()
+    one_correction_into(m)
     return m, c
 
 

@@ -27,18 +27,25 @@ def peak_mb() -> float:
     return COMM.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, op=MPI.MAX)
 
 
-def _row(scene: str, size: float, name: str, repeats: int, increments: int) -> dict:
-    """The row of one scene, size and linear solver: ``repeats`` short runs of ``increments``."""
-    runs = [short_run(scene, size, increments, linear_solver=name) for _ in range(repeats)]
+def solver_row(runs: list[dict], **labels) -> dict:
+    """The row of repeated runs (:func:`~.runs.short_run`'s figures) with one linear solver:
+    ``labels`` first, then dofs, ranks, Newton iterations, Krylov iterations per solve, CPU and
+    wall seconds per Newton iteration (median and spread) and the peak memory so far."""
     its = [max(r["iterations"], 1) for r in runs]
     newton = runs[-1]["newton"]
-    row = {"scene": scene, "size": size, "dofs": runs[-1]["dofs"], "ranks": COMM.size, "solver": name,
-           "newton_its": runs[-1]["iterations"], "completed_to": runs[-1]["completed_to"],
+    row = {**labels, "dofs": runs[-1]["dofs"], "ranks": COMM.size, "newton_its": runs[-1]["iterations"],
+           "completed_to": runs[-1]["completed_to"],
            "krylov_per_solve": newton.krylov_total / max(newton.linear_solves, 1)}
     row["cpu_per_it_s"], row["cpu_spread_s"] = stats([r["cpu"] / i for r, i in zip(runs, its)])
     row["wall_per_it_s"], row["wall_spread_s"] = stats([r["wall"] / i for r, i in zip(runs, its)])
     row["peak_mb"] = peak_mb()
     return row
+
+
+def _row(scene: str, size: float, name: str, repeats: int, increments: int) -> dict:
+    """The row of one scene, size and linear solver: ``repeats`` short runs of ``increments``."""
+    runs = [short_run(scene, size, increments, linear_solver=name) for _ in range(repeats)]
+    return solver_row(runs, scene=scene, size=size, solver=name)
 
 
 def krylov(out: pathlib.Path, scene: str = "plate", sizes=None, names=NAMES, repeats: int = 3,

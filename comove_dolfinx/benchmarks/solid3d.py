@@ -20,8 +20,8 @@ from ..mechanics.body import Body
 from ..mechanics.materials import J2, Hardening
 from ..mechanics.model import Model
 from ..solver import NewtonSettings, StepSettings
-from .multigrid import peak_mb
-from .runs import COMM, say, stats, timed_run, write_csv
+from .multigrid import solver_row
+from .runs import COMM, say, timed_run, write_csv
 
 #: mesh sizes of about 50k, 200k and 1M dofs (P2 tetrahedra: about 96 / size^3 dofs)
 SIZES = (0.125, 0.078, 0.046)
@@ -40,19 +40,9 @@ def block(size: float) -> Model:
 
 def _row(size: float, name: str, repeats: int, increments: int) -> dict:
     """The row of one size and linear solver: ``repeats`` runs of ``increments`` increments."""
-    runs = []
-    for _ in range(repeats):
-        settings = NewtonSettings(linear_solver=name)
-        runs.append(timed_run(block(size), settings, StepSettings(n_increments=increments)))
-    its = [max(r["iterations"], 1) for r in runs]
-    newton = runs[-1]["newton"]
-    row = {"size": size, "dofs": runs[-1]["dofs"], "ranks": COMM.size, "solver": name,
-           "newton_its": runs[-1]["iterations"], "completed_to": runs[-1]["completed_to"],
-           "krylov_per_solve": newton.krylov_total / max(newton.linear_solves, 1)}
-    row["cpu_per_it_s"], row["cpu_spread_s"] = stats([r["cpu"] / i for r, i in zip(runs, its)])
-    row["wall_per_it_s"], row["wall_spread_s"] = stats([r["wall"] / i for r, i in zip(runs, its)])
-    row["peak_mb"] = peak_mb()
-    return row
+    runs = [timed_run(block(size), NewtonSettings(linear_solver=name), StepSettings(n_increments=increments))
+            for _ in range(repeats)]
+    return solver_row(runs, size=size, solver=name)
 
 
 def solid(out: pathlib.Path, sizes=None, names=NAMES, repeats: int = 2, increments: int = 3) -> list[dict]:

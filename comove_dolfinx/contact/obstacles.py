@@ -107,11 +107,10 @@ class Plane(Obstacle):
         return (x - self.point - d) @ self.n
 
 
-class _Ball(Obstacle):
-    """A rigid disc (2D) or ball (3D) of radius ``radius`` about ``center``; the body is outside it."""
-
-    def _rel(self, x, d):
-        return x - ufl.as_vector(self.center) - (self.d if d is None else d)
+class _Round(Obstacle):
+    """An obstacle whose surface is at the distance ``radius`` from a centre or an axis, the body
+    outside: the gap is the length of x's offset ``_rel`` from it minus the radius, the normal
+    that offset's direction."""
 
     def gap(self, x, d=None):
         r = self._rel(x, d)
@@ -120,6 +119,13 @@ class _Ball(Obstacle):
     def normal(self, x, d=None):
         r = self._rel(x, d)
         return r / ufl.sqrt(ufl.dot(r, r))
+
+
+class _Ball(_Round):
+    """A rigid disc (2D) or ball (3D) of radius ``radius`` about ``center``; the body is outside it."""
+
+    def _rel(self, x, d):
+        return x - ufl.as_vector(self.center) - (self.d if d is None else d)
 
     def gap_np(self, x, d):
         return np.linalg.norm(x - self.center - d, axis=1) - self.radius
@@ -270,7 +276,7 @@ class Profile(Obstacle):
         return dist - self.radius
 
 
-class Cylinder(Obstacle):
+class Cylinder(_Round):
     """A rigid cylinder of radius ``radius`` about the axis through ``point`` along ``axis`` (3-vectors,
     the axis need not be of unit length); the body is outside it (3D). The gap is the distance
     from the axis minus the radius, the normal points from the axis to x, square to it."""
@@ -291,14 +297,6 @@ class Cylinder(Obstacle):
         r = x - ufl.as_vector(self.point) - (self.d if d is None else d)
         a = ufl.as_vector(self.axis)
         return r - ufl.dot(r, a) * a
-
-    def gap(self, x, d=None):
-        r = self._rel(x, d)
-        return ufl.sqrt(ufl.dot(r, r)) - self.radius
-
-    def normal(self, x, d=None):
-        r = self._rel(x, d)
-        return r / ufl.sqrt(ufl.dot(r, r))
 
     def gap_np(self, x, d):
         r = x - self.point - d
