@@ -82,16 +82,34 @@ def test_multigrid_gives_the_direct_history(direct, name, pc):
 
 @pytest.mark.mpi
 def test_a_krylov_solve_that_stops_short_is_a_failure_and_a_cutback():
-    """Two Krylov iterations cannot reach 1e-8: every attempt fails with the cause "krylov",
-    the increment is halved down to its smallest size, and the run stops with the message and
-    the advice (the iteration limit or the direct solver), on every rank alike."""
+    """Two Krylov iterations reach neither 1e-8 nor krylov.KRYLOV_ACCEPT: every attempt fails with
+    the cause "krylov", the increment is halved down to its smallest size, and the run stops with
+    the message (the residual reached) and the advice (the iteration limit or the direct solver),
+    on every rank alike."""
     model, solver, res = _ring("gamg", {"ksp_max_it": 2}, n=1, max_cutbacks=2, first=1.0,
                                  retry=False)
     assert not res.completed and not res.increments
     assert res.failures == {failures.KRYLOV: 3}          # the nominal increment and two halvings
     assert "did not converge" in res.message and "after 2 iterations" in res.message, res.message
+    assert "relative residual" in res.message
     assert "ksp_max_it" in res.advice and "mumps" in res.advice
 
+
+
+@pytest.mark.mpi
+def test_a_krylov_solve_stopped_near_its_tolerance_is_an_inexact_newton_step(direct):
+    """A tolerance out of reach (1e-13) with a limit of 40 iterations: the solves stop at the limit
+    with their residuals far below krylov.KRYLOV_ACCEPT, are taken as inexact Newton steps, and
+    the run takes the direct solve's increments, with no failure, Newton iterations within 20 % of
+    its and its state (a solve counted as failed would halve the increment instead)."""
+    model, solver, res = _ring("gamg", {"ksp_max_it": 40, "ksp_rtol": 1e-13})
+    assert res.completed and not res.failures, res.message
+    assert solver.newton.inexact_solves >= 1
+    ref, its, incs = direct
+    assert [i.load for i in res.increments] == pytest.approx([i.load for i in incs], abs=1e-12)
+    assert abs(sum(i.newton_its + i.failed_its for i in res.increments) - its) <= 0.2 * its
+    rows = _nodal(model)
+    assert np.abs(rows[:, 2:] - ref[:, 2:]).max() <= 1e-6 * np.abs(ref[:, 2:]).max()
 
 def test_linear_solver_names_are_checked_and_auto_keeps_mumps_in_2d():
     with pytest.raises(SettingsError, match="linear_solver = 'ilu'"):

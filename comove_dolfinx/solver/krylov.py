@@ -33,8 +33,12 @@ from ..choices import LINEAR_SOLVERS  # noqa: F401 - the names, checked with the
 #: factor per iteration from the linear error alone, far below the quadratic rate's until the
 #: last iteration, so Newton takes the iterations it takes with a direct solve (docs/performance.md)
 KRYLOV_RTOL = 1e-8
-#: Krylov iterations before a solve counts as failed (failures.KRYLOV; the increment is halved)
+#: Krylov iterations before a solve stops (``ksp_max_it``)
 KRYLOV_MAX_IT = 500
+#: a solve stopped by the iteration limit is still Newton's step when its true residual has fallen by
+#: this factor (an inexact Newton step: Newton's residual still falls by about as much in that
+#: iteration); one that has not counts as failed (failures.KRYLOV: the increment is halved)
+KRYLOV_ACCEPT = 1e-4
 
 _GMRES = {"ksp_type": "gmres", "ksp_pc_side": "right", "ksp_gmres_restart": 100,
           "ksp_rtol": KRYLOV_RTOL, "ksp_atol": 0.0, "ksp_max_it": KRYLOV_MAX_IT}
@@ -139,11 +143,27 @@ REASONS = {-3: "the iteration limit", -4: "divergence of the residual", -5: "a b
            -9: "a NaN or Inf", -11: "a failed preconditioner set-up"}
 
 
-def not_converged(ksp: PETSc.KSP) -> str:
+def reached(ksp: PETSc.KSP, rhs: PETSc.Vec) -> float:
+    """The relative residual ``||J du - rhs|| / ||rhs||`` the last solve of ``ksp`` reached (for
+    GMRES preconditioned on the right, its true residual; collective)."""
+    scale = rhs.norm()
+    return ksp.getResidualNorm() / scale if scale > 0.0 else 0.0
+
+
+def inexact(ksp: PETSc.KSP, rhs: PETSc.Vec) -> float | None:
+    """The relative residual of a solve that the iteration limit stopped after it had fallen below
+    :data:`KRYLOV_ACCEPT` (an inexact Newton step to take); None for any other solve."""
+    if ksp.getConvergedReason() != -3:       # KSP_DIVERGED_ITS (REASONS)
+        return None
+    rel = reached(ksp, rhs)
+    return rel if rel <= KRYLOV_ACCEPT else None
+
+
+def not_converged(ksp: PETSc.KSP, rhs: PETSc.Vec) -> str:
     """Why the iterative solve of ``ksp`` stopped without converging, in one phrase: PETSc's reason,
     the iterations and the relative residual reached."""
     reason = ksp.getConvergedReason()
     why = REASONS.get(reason, "PETSc's reason")
     return (f"the iterative solver ({ksp.getType()} + {ksp.getPC().getType()}) did not converge: "
             f"{why} (KSP reason {reason}) after {ksp.getIterationNumber()} iterations, "
-            f"rtol {ksp.getTolerances()[0]:.1e}")
+            f"relative residual {reached(ksp, rhs):.1e} (rtol {ksp.getTolerances()[0]:.1e})")

@@ -84,6 +84,7 @@ class Newton(LineSearches):
         self.iterative = not linear.is_direct(self.ksp)   # multigrid: the rigid motions at each tangent
         self.krylov_its: list[int] = []    # Krylov iterations of each linear solve of the last solve()
         self.linear_solves = self.krylov_total = 0     # over the Newton's life (benchmarks, summaries)
+        self.inexact_solves = 0           # Krylov solves stopped at their limit, taken as inexact steps
         ls = self.settings.line_search
         if ls is None:       # friction: the energy search stops in the stick band (theory.md 7.1)
             contacts = [item for item in model.items if item.kind == "contact"]
@@ -157,8 +158,13 @@ class Newton(LineSearches):
         self._linear_cause = failures.LINEAR
         if failure is None:
             reason = self.ksp.getConvergedReason()
-            if reason < 0 and self.iterative:
-                failure, self._linear_cause = krylov.not_converged(self.ksp), failures.KRYLOV
+            rel = krylov.inexact(self.ksp, rhs) if reason < 0 and self.iterative else None
+            if rel is not None:
+                self.inexact_solves += 1
+                log.info("    the Krylov solve stopped at %d iterations with its residual down to %.1e: "
+                         "taken as an inexact Newton step", self.krylov_its[-1], rel)
+            elif reason < 0 and self.iterative:
+                failure, self._linear_cause = krylov.not_converged(self.ksp, rhs), failures.KRYLOV
             elif reason < 0:
                 why = linear.factor_error(self.ksp)
                 failure = f"the linear solver failed (PETSc KSP reason {reason}{'; ' + why if why else ''})"
