@@ -202,3 +202,19 @@ def test_vtu_files_read_back_with_meshio(tmp_path):
             assert m.point_data[name].shape == v.shape and np.array_equal(m.point_data[name], v)
         for name, v in cell.items():
             assert m.cell_data[name][0].shape == v.shape and np.array_equal(m.cell_data[name][0], v)
+
+
+def test_the_collection_is_valid_after_every_dataset_and_never_replaced(tmp_path):
+    """io/pvd.py: after each dataset the .pvd parses and lists exactly the datasets given so far,
+    in order (a file name with XML's special characters escaped), and after the first write the
+    file keeps its inode: the later datasets are written into it, not by replacing it."""
+    from comove_dolfinx.io.pvd import Collection
+    path = tmp_path / "results.pvd"
+    col, entries, inodes = Collection(path), [], set()
+    for k, name in enumerate(["a_00000.vtu", "b&<c>_00001.vtu", "a_00002.vtu"]):
+        entries.append((0.125 * (k + 1), name))
+        col.add(entries)
+        assert _pvd(tmp_path) == [(t, tmp_path / f) for t, f in entries]
+        inodes.add(path.stat().st_ino)
+    assert len(inodes) == 1
+    assert not list(tmp_path.glob(".*tmp"))

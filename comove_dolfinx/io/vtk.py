@@ -13,15 +13,15 @@ increment, so that ParaView's open -> Warp By Vector -> colour by any field work
   ``von_mises_cell_avg`` (of the averaged stress), ``plastic_strain_cell_avg`` (elastic-plastic
   bodies) and the fibre stresses (``<name>_cell_avg``).
 
-The collection ``results.pvd`` lists the increments with their time (the job's ``time`` column).
-Rank 0 gathers and writes; each file is written under a temporary name and renamed into place, so
-a run that is killed leaves every increment it converged readable and never half a file.
+The collection ``results.pvd`` lists the increments with their time (the job's ``time`` column;
+io/pvd.py). Rank 0 gathers and writes; each dataset is written under a temporary name and renamed
+into place before the collection names it, so a run that is killed leaves every increment it
+converged readable and never half a file.
 """
 from __future__ import annotations
 
 import os
 import pathlib
-from html import escape
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from ..checks import first, flag, text
 from ..parallel import on_root
 from . import vtu
 from .folder import FolderError
+from .pvd import Collection
 from .writers import Writer
 from .xdmf import FibreStress, stress_tensors, von_mises
 
@@ -111,6 +112,7 @@ class VTK(Writer):
                 self.points[g] = x
             self.cells = np.concatenate([c for _, _, c in parts])
         self.grid = None                     # (on rank 0, at the first write: vtu.Grid)
+        self.collection = None               # (on rank 0, at the first write: pvd.Collection)
         self.fibres = [FibreStress(m, name, A) for name, A in self.fibre_specs]
         self.contacts = [item for item in m.items if item.kind == "contact"]
         on_root(self.comm, self._take_folder, bool(run.resumed_rows))
@@ -176,7 +178,6 @@ class VTK(Writer):
         if getattr(self, "grid", None) is None:
             self.grid = vtu.Grid(self.points, self.cell_type, self.cells)
         _atomic_write(self.folder / fname, lambda p: self.grid.write(p, point, cell))
-        lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1">', "<Collection>"]
-        lines += [f'  <DataSet timestep="{t:.12g}" part="0" file="{escape(f)}"/>' for t, f in self.steps]
-        lines += ["</Collection>", "</VTKFile>", ""]
-        _atomic_write(self.folder / f"{self.name}.pvd", lambda p: p.write_text("\n".join(lines)))
+        if self.collection is None:
+            self.collection = Collection(self.folder / f"{self.name}.pvd")
+        self.collection.add(self.steps)
