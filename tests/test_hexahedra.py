@@ -136,3 +136,150 @@ def test_patch_test_j2_finite_strain(cache):
     sigma = (sy + H * eps) / (1.0 + H / E)
     np.testing.assert_allclose(m.cauchy_stress()[:, 0], sigma, rtol=1e-10, atol=0)
     np.testing.assert_allclose(m.p.x.array, eps - sigma / E, rtol=1e-9, atol=0)
+
+
+# -- tetrahedra against hexahedra -----------------------------------------------------------------------
+def _cantilever(cache, size, hexahedra, comm=MPI.COMM_WORLD):
+    """A J2 cantilever 1 x 0.5 x 0.25 (P2/Q2, sr_log) clamped on its left face, under an end traction
+    and a follower pressure on its upper face: (tip deflection, vertical reaction, plastic strain, dofs)."""
+    md = geometry.box(1.0, 0.5, 0.25, size, comm=comm, cache_dir=cache, hexahedra=hexahedra)
+    material = cm.J2(E, NU, cm.Hardening((0.0, 0.05, 0.2), (15.0, 20.0, 22.0)))
+    items = [cm.Fixed("left"), cm.Traction("right", (0.0, -1.3, 0.0)), cm.Pressure("back", 0.5)]
+    job = cm.Job(cm.Body(md, "solid", material, update="sr_log"), items, [cm.Step(4)],
+                 [cm.NodeDisplacement("tip", (1.0, 0.5, 0.0)), cm.Reaction("left", "clamp", dim=3),
+                  cm.MaxPlasticStrain()])
+    res = job.run()
+    assert res.completed, res.message
+    return res.last["tip_uy"], res.last["clamp_fy"], res.last["max_plastic_strain"], res
+
+
+def test_tetrahedra_and_hexahedra_converge_to_each_other(cache):
+    """The same partly plastic cantilever on P2 tetrahedra and Q2 bricks: their tip deflections and
+    their reactions (the follower pressure's resultant turns with the face) differ by the
+    discretisation error, which falls as the mesh is refined (measured: deflections 8.7e-3, 7.8e-4,
+    2.8e-4 apart at sizes 0.25, 0.125, 0.0625; reactions 1.1e-4, 6.4e-5, 2.2e-5)."""
+    diffs, reactions = [], []
+    for size in (0.25, 0.125):
+        tet, hexa = (_cantilever(cache, size, h) for h in (False, True))
+        assert abs(tet[0]) > 0.02 and tet[2] > 0.0 and hexa[2] > 0.0
+        diffs.append(abs(hexa[0] / tet[0] - 1.0))
+        reactions.append(abs(hexa[1] / tet[1] - 1.0))
+    assert diffs[0] < 1.5e-2 and diffs[1] < 0.2 * diffs[0], diffs
+    assert reactions[0] < 5e-4 and reactions[1] < 0.8 * reactions[0], reactions
+
+
+# -- Taylor test ------------------------------------------------------------------------------------------
+def _taylor_state(cache, degree, contact=None):
+    """A J2 block of bricks sheared and compressed between its bottom (held) and its top (moved), a
+    follower pressure and a dead traction on two faces and a body force; with ``contact`` its bottom
+    pressed onto a plane with friction instead: two converged increments, then one Newton
+    correction into the next."""
+    md = geometry.box(1.0, 0.5, 0.5, 0.25, order=degree, cache_dir=cache, hexahedra=True)
+    material = cm.J2(1000.0, 0.3, cm.Hardening((0.0, 0.05, 0.2), (15.0, 20.0, 22.0)))
+    items = [cm.Displacement("top", (0.06, 0.03, -0.06)), cm.Pressure("right", 5.0),
+             cm.Traction("left", (2.0, -1.0, 0.5)), cm.BodyForce((2.0, -10.0, 3.0))]
+    if contact is None:
+        items.append(cm.Fixed("bottom"))
+    else:
+        items.append(cm.Contact("bottom", cm.Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), method=contact,
+                                gamma0=10.0, mu=0.1))
+    m = Model(Body(md, "solid", material, update="sr_log", degree=degree), items)
+    m.finalize()
+    one_correction_into(m)
+    assert m.comm.allreduce(int(np.sum(m.p.x.array > m.p_n.x.array)), op=MPI.SUM) > 0, "no point yields"
+    return m
+
+
+TAYLOR = [dict(degree=2), dict(degree=1), dict(degree=2, contact="penalty"), dict(degree=2, contact="nitsche")]
+
+
+@pytest.mark.parametrize("case", TAYLOR, ids=["-".join(map(str, c.values())) for c in TAYLOR])
+def test_jacobian_is_exact_on_hexahedra(cache, case):
+    result = taylor_test(_taylor_state(cache, **case), h0=1e-4, n=8)
+    assert np.all(np.abs(result.orders[-3:] - 2.0) < 0.15), str(result)
+
+
+# -- output, restart, ranks ------------------------------------------------------------------------------
+@pytest.mark.parametrize("order", [1, 2])
+def test_vtk_of_hexahedra(tmp_path, order):
+    """Read back with meshio: 8-node bricks (VTK_HEXAHEDRON) or 27-node ones
+    (VTK_TRIQUADRATIC_HEXAHEDRON), each cell's nodes at VTK's own parametric coordinates of its
+    type (asked of VTK) in the brick; the points are the reference nodes, the displacement at each
+    is G X, every cell's stress is the closed form's."""
+    import meshio
+    cells_vtk = pytest.importorskip("vtkmodules.vtkCommonDataModel")
+    md = geometry.box(1.0, 0.5, 0.5, 0.25, order=order, comm=MPI.COMM_SELF, cache_dir=str(tmp_path),
+                      hexahedra=True)
+    items = [cm.Displacement(face, field=lambda x, t: t * (G @ x)) for face in BOX_FACES]
+    body = cm.Body(md, "solid", cm.Elastic(E, NU), degree=order, update="small_strain")
+    assert cm.Job(body, items, [cm.Step(2)], writers=[cm.VTK(tmp_path / "out")]).run().completed
+    m = meshio.read(tmp_path / "out" / "results_00001.vtu")
+    kind = {1: "hexahedron", 2: "hexahedron27"}[order]
+    assert list(m.cells_dict) == [kind]
+    cells, X = m.cells_dict[kind], m.points
+    assert cells.shape == (4 * 2 * 2, {1: 8, 2: 27}[order])
+    cell = {1: cells_vtk.vtkHexahedron, 2: cells_vtk.vtkTriQuadraticHexahedron}[order]()
+    p = cell.GetParametricCoords()
+    ref = np.array([p[i] for i in range(3 * cells.shape[1])]).reshape(-1, 3)
+    low, high = X[cells[:, 0]], X[cells[:, 6]]          # VTK's vertices 0 and 6: opposite corners
+    np.testing.assert_allclose(X[cells], low[:, None, :] + ref[None, :, :] * (high - low)[:, None, :], atol=1e-12)
+    assert np.prod(high - low, axis=1).sum() == pytest.approx(0.25, rel=1e-12)   # the bricks fill the box
+    np.testing.assert_allclose(m.point_data["displacement"], X @ G.T, atol=1e-12)
+    sigma, _ = _closed_form(False)
+    np.testing.assert_allclose(m.cell_data["cauchy_stress_cell_avg"][0], np.tile(sigma.ravel(), (len(cells), 1)),
+                               rtol=0, atol=1e-8 * np.abs(sigma).max())
+
+
+def _bent_block(folder, checkpoint=None, stop_after=None, comm=MPI.COMM_WORLD):
+    """A J2 block of Q2 bricks held on its left face, its right face moved down and along x at
+    finite strain (sr_log), in 5 increments: plastic flow, a non-uniform state at every point."""
+    from comove_dolfinx.io.checkpoint import Checkpoint
+    from comove_dolfinx.io.writers import Writer
+    md = geometry.box(1.0, 0.4, 0.4, 0.2, order=2, comm=comm, cache_dir=str(folder), hexahedra=True)
+    body = cm.Body(md, "solid", cm.J2(E, NU, cm.Hardening.linear(5.0, 50.0)), update="sr_log")
+    items = [cm.Fixed("left"), cm.Displacement("right", (0.02, -0.08, 0.03))]
+
+    class Stop(Writer):
+        def write(self, run, row, increment):
+            if stop_after is not None and row["increment"] == stop_after:
+                raise RuntimeError("stopped by the test")
+    writers = ([Checkpoint(checkpoint, every=1, interval=0.0)] if checkpoint is not None else []) + [Stop()]
+    probes = [cm.Reaction("left", "clamp", dim=3), cm.NodeDisplacement("tip", (1.0, 0.4, 0.4)),
+              cm.MaxPlasticStrain()]
+    return cm.Job(body, items, [cm.Step(5)], probes, writers=writers)
+
+
+@pytest.mark.mpi
+def test_a_run_on_hexahedra_restarts_to_the_uninterrupted_history(mpi_tmp):
+    """Stopped after increment 3, then restarted from its checkpoint: the history and Newton's
+    iterations are those of the run that was not stopped, to 1e-12, on however many ranks the test
+    runs (and on one rank from the checkpoint of several)."""
+    full = _bent_block(mpi_tmp).run()
+    assert full.completed and len(full) == 5 and full["max_plastic_strain"][-1] > 0.0
+    folder = mpi_tmp / "checkpoint"
+    with pytest.raises(RuntimeError, match="stopped by the test"):
+        _bent_block(mpi_tmp, folder, stop_after=3).run()
+    comm = MPI.COMM_WORLD
+    kept = mpi_tmp / "checkpoint_3"
+    if comm.rank == 0:
+        shutil.copytree(folder, kept)
+    comm.barrier()
+    _same_history(_bent_block(mpi_tmp, folder).run(restart=folder), full)
+    if comm.size > 1:
+        try:
+            if comm.rank == 0:
+                _same_history(_bent_block(mpi_tmp, comm=MPI.COMM_SELF).run(restart=kept), full)
+        finally:
+            comm.barrier()
+
+
+@pytest.mark.mpi
+def test_hexahedra_on_two_ranks_are_the_serial_run(mpi_tmp):
+    """The J2 block of bricks distributed over the ranks and, on every rank, on its own (COMM_SELF):
+    the same Newton iterations and history to 1e-9 of each column."""
+    par = _bent_block(mpi_tmp).run()
+    ser = _bent_block(mpi_tmp, comm=MPI.COMM_SELF).run()
+    assert par.completed and ser.completed and par.newton_its == ser.newton_its
+    for col in ("clamp_fx", "clamp_fy", "clamp_fz", "tip_ux", "tip_uy", "tip_uz", "max_plastic_strain"):
+        r = np.asarray(ser[col], float)
+        np.testing.assert_allclose(par[col], r, rtol=0, atol=1e-9 * np.abs(r).max(), err_msg=col)
