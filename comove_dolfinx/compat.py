@@ -57,7 +57,7 @@ def function_space(mesh, family: str, degree: int, shape: tuple = ()):
         raise ValueError(f"family {family!r}: Lagrange or DG")
     shape = tuple(shape)
     if _OLD:
-        fam = "CG" if family == "Lagrange" else "DG"
+        fam = "CG" if family == "Lagrange" else ("DG" if mesh.ufl_cell().is_simplex() else "DQ")
         if shape == ():
             return fem.FunctionSpace(mesh, (fam, degree))
         if len(shape) == 1 and shape[0] == mesh.geometry.dim:

@@ -87,6 +87,40 @@ def test_hexahedra_refusals(cache):
                              hexahedra=True)
 
 
+PROBLEM = """
+[mesh]
+builder = "box"
+Lx = 1.0
+Ly = 0.5
+Lz = 0.5
+size = 0.25
+hexahedra = {flag}
+
+[body]
+kind = "solid"
+material = {{ E = 1000.0, nu = 0.3 }}
+
+[[items]]
+type = "fixed"
+boundary = "left"
+"""
+
+
+def test_a_problem_file_asks_for_hexahedra(tmp_path):
+    """``hexahedra = true`` in [mesh] builds bricks; a value that is not a boolean is refused in one
+    line naming it."""
+    from comove_dolfinx import problem
+    from comove_dolfinx.problem_schema import ProblemError
+    path = tmp_path / "block.toml"
+    path.write_text(PROBLEM.format(flag="true"))
+    data = problem.read(path)
+    data["mesh"]["cache_dir"] = str(tmp_path)
+    assert compat.cell_name(problem.build(data, MPI.COMM_WORLD).body.mesh.mesh) == "hexahedron"
+    path.write_text(PROBLEM.format(flag='"yes"'))
+    with pytest.raises(ProblemError, match=r"\[mesh\]: hexahedra = 'yes': give true or false"):
+        problem.read(path)
+
+
 # -- patch tests ----------------------------------------------------------------------------------------
 def _patch(md, faces, degree, update="small_strain", material=None, grad=G, n=1):
     """Every face held at u = t grad X: (the model, the stress at every quadrature point)."""
@@ -136,6 +170,24 @@ def test_patch_test_j2_finite_strain(cache):
     sigma = (sy + H * eps) / (1.0 + H / E)
     np.testing.assert_allclose(m.cauchy_stress()[:, 0], sigma, rtol=1e-10, atol=0)
     np.testing.assert_allclose(m.p.x.array, eps - sigma / E, rtol=1e-9, atol=0)
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_compression_on_a_frictionless_plane(cache, degree):
+    """A block of bricks pressed onto a plane (Nitsche, frictionless) by its top face moved down by
+    d: uniform compression, so the contact force is E d / H times the area, the contact area is the
+    bottom face and the peak of the nodal pressure is E d / H (small strain, the sides free)."""
+    d, H = 0.01, 0.5
+    md = geometry.box(1.0, 0.5, H, 0.25, order=degree, cache_dir=cache, hexahedra=True)
+    c = cm.Contact("bottom", cm.Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), method="nitsche", gamma0=10.0)
+    items = [cm.Fixed("left", 0), cm.Fixed("front", 1), cm.Displacement("top", -d, component=2), c]
+    body = cm.Body(md, "solid", cm.Elastic(E, NU), update="small_strain", degree=degree)
+    res = cm.Job(body, items, [cm.Step(2)], [cm.ContactForce(c, "P", component=2), cm.ContactArea(c, "A"),
+                                             cm.ContactPeak(c, "p0")]).run()
+    assert res.completed, res.message
+    assert res.last["P"] == pytest.approx(E * d / H * 0.5, rel=1e-9)
+    assert res.last["A"] == pytest.approx(0.5, rel=1e-12)
+    assert res.last["p0"] == pytest.approx(E * d / H, rel=1e-9)
 
 
 # -- tetrahedra against hexahedra -----------------------------------------------------------------------
