@@ -163,6 +163,25 @@ def _bricks(volume: int, size: float, arc: float, tol: float) -> None:
     mesh.setTransfiniteVolume(volume)
 
 
+def _tube_params(r_in, r_out, length, size, angle, order, grading: tuple, hexahedra) -> tuple[dict, dict]:
+    """The parameters of :func:`tube_sector` to hash and those of its refinement (``grading``:
+    size_contact, contact_zone, growth), checked (MeshError naming the value)."""
+    _positive(r_in=r_in, r_out=r_out, length=length, size=size, angle=angle)
+    order = _check_order(order)
+    if not r_in < r_out:
+        raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
+    if not angle <= math.pi:
+        raise MeshError(f"angle must lie in (0, pi] (radians; pi/2 is a quarter), got {angle!r}")
+    refine = _check_refinement(size, *grading)
+    if hexahedra is True and refine:
+        raise MeshError(f"size_contact = {refine['size_contact']!r} grades tetrahedra only: drop it with "
+                        "hexahedra=True (the bricks are uniform; a smaller size refines them all)")
+    params = dict(r_in=float(r_in), r_out=float(r_out), length=float(length), size=float(size),
+                  angle=float(angle), order=order, **refine, **_hexahedra(hexahedra))
+    _not_too_fine("tube_sector", params)
+    return params, refine
+
+
 def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: float = math.pi / 2,
                 order: int = 2, size_contact: float | None = None, contact_zone: float | None = None,
                 growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
@@ -205,19 +224,8 @@ def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: fl
         angle = pi/2 (on y = 0), part of "xsym" for angle = pi (on x = 0, y < 0), "side" otherwise;
         zsym (z = 0), end (z = length). Cells "body" = BODY_TAG.
     """
-    _positive(r_in=r_in, r_out=r_out, length=length, size=size, angle=angle)
-    order = _check_order(order)
-    if not r_in < r_out:
-        raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
-    if not angle <= math.pi:
-        raise MeshError(f"angle must lie in (0, pi] (radians; pi/2 is a quarter), got {angle!r}")
-    refine = _check_refinement(size, size_contact, contact_zone, growth)
-    if hexahedra is True and refine:
-        raise MeshError(f"size_contact = {size_contact!r} grades tetrahedra only: drop it with "
-                        "hexahedra=True (the bricks are uniform; a smaller size refines them all)")
-    params = dict(r_in=float(r_in), r_out=float(r_out), length=float(length), size=float(size),
-                  angle=float(angle), order=order, **refine, **_hexahedra(hexahedra))
-    _not_too_fine("tube_sector", params)
+    params, refine = _tube_params(r_in, r_out, length, size, angle, order, (size_contact, contact_zone, growth),
+                                  hexahedra)
 
     def construct() -> None:
         occ = gmsh.model.occ
