@@ -201,6 +201,12 @@ def _cells_graded_3d(volume: float, p: dict) -> float:
     return cells + (volume - done) / tet
 
 
+def _bricks_of_tube(p: dict) -> float:
+    """The transfinite bricks of ``tube_sector(..., hexahedra=True)``: around, through, along."""
+    return (math.ceil(p.get("angle", math.pi / 2) * p["r_out"] / p["size"])
+            * math.ceil((p["r_out"] - p["r_in"]) / p["size"]) * math.ceil(p["length"] / p["size"]))
+
+
 #: builder -> its cell count from its parameters (the builders' own formulas, geometry/builders.py)
 CELLS = {
     "rectangle": lambda p: _structured(math.ceil(p["L"] / p["size"]), max(math.ceil(p["H"] / p["size"]), 2)),
@@ -212,10 +218,10 @@ CELLS = {
         max(math.ceil(p.get("angle", math.pi / 2) * 0.5 * (p["r_in"] + p["r_out"]) / p["size"]), 1)),
     "quarter_disc": _cells_quarter_disc,
     "necking_bar": lambda p: _structured(p.get("n_r", 5), p.get("n_z", 40)),
-    # box: the rectangle's triangles extruded in layers, each prism cut into 3 tetrahedra
-    "box": lambda p: 3 * _structured(math.ceil(p["Lx"] / p["size"]), max(math.ceil(p["Ly"] / p["size"]), 2))
-    * max(math.ceil(p["Lz"] / p["size"]), 1),
-    "tube_sector": lambda p: _cells_graded_3d(
+    # box: the rectangle's triangles extruded in layers, each prism cut into 3 tetrahedra (or bricks)
+    "box": lambda p: (0.5 if p.get("hexahedra") else 3) * _structured(
+        math.ceil(p["Lx"] / p["size"]), max(math.ceil(p["Ly"] / p["size"]), 2)) * max(math.ceil(p["Lz"] / p["size"]), 1),
+    "tube_sector": lambda p: _bricks_of_tube(p) if p.get("hexahedra") else _cells_graded_3d(
         0.5 * p.get("angle", math.pi / 2) * (p["r_out"] ** 2 - p["r_in"] ** 2) * p["length"], p),
     "sphere_octant": lambda p: _cells_graded_3d(math.pi * p["R"] ** 3 / 6.0, p),
 }

@@ -29,8 +29,8 @@ _OLD = VERSION < (0, 9)
 
 ScalarType = PETSc.ScalarType
 
-_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral,
-          "tetrahedron": basix.CellType.tetrahedron}
+_CELLS = {name: getattr(basix.CellType, name) for name in ("triangle", "quadrilateral", "tetrahedron",
+                                                             "hexahedron")}
 
 
 def check_version() -> None:
@@ -45,7 +45,7 @@ def check_version() -> None:
 # Spaces and elements
 # ------------------------------------------------------------------------------------------------
 def cell_name(mesh) -> str:
-    """'triangle', 'quadrilateral' or 'tetrahedron' (a method of ufl.Cell up to ufl 2025, a property from 2026)."""
+    """'triangle', 'quadrilateral', 'tetrahedron', 'hexahedron' (ufl.Cell's method to ufl 2025, then property)."""
     name = mesh.ufl_cell().cellname
     return name() if callable(name) else name
 
@@ -57,7 +57,7 @@ def function_space(mesh, family: str, degree: int, shape: tuple = ()):
         raise ValueError(f"family {family!r}: Lagrange or DG")
     shape = tuple(shape)
     if _OLD:
-        fam = "CG" if family == "Lagrange" else "DG"
+        fam = "CG" if family == "Lagrange" else ("DG" if mesh.ufl_cell().is_simplex() else "DQ")
         if shape == ():
             return fem.FunctionSpace(mesh, (fam, degree))
         if len(shape) == 1 and shape[0] == mesh.geometry.dim:
@@ -335,7 +335,7 @@ def _snes_newton(F, u, bcs, J, petsc_options: dict, rtol: float, prefix: str, mo
 
 
 _GMSH_CELLS = {2: ("triangle", 1), 9: ("triangle", 2), 3: ("quadrilateral", 1), 10: ("quadrilateral", 2),
-               4: ("tetrahedron", 1), 11: ("tetrahedron", 2)}
+               4: ("tetrahedron", 1), 11: ("tetrahedron", 2), 5: ("hexahedron", 1), 12: ("hexahedron", 2)}
 """Gmsh's element type -> (cell, degree) of the cells that comove_dolfinx reads."""
 
 

@@ -99,7 +99,8 @@ def _mesh(path: pathlib.Path, mesh) -> None:
         raise ProblemError(f"{where} builder = {b!r}: choose one of {', '.join(BUILDERS)} or "
                            "give file = \"part.msh\"")
     sizes = BUILDERS[b] + BUILDER_OPTIONS.get(b, ())
-    _check(where, mesh, {"builder": str, "order": int, **{k: float for k in sizes}}, required=BUILDERS[b])
+    bricks = {"hexahedra": bool} if b in ("box", "tube_sector") else {}
+    _check(where, mesh, {"builder": str, "order": int, **bricks, **{k: float for k in sizes}}, required=BUILDERS[b])
     for k in sizes:
         if k in mesh and mesh[k] <= 0:
             raise ProblemError(f"{where} {k} = {mesh[k]}: give a number > 0")

@@ -136,8 +136,8 @@ def p1_interpolation(S, S1, degree: int):
     field into the boundary fields' space S (P1 or P2: a vertex takes its value, an edge's
     midpoint the mean of the edge's ends; triangles and tetrahedra), in numpy: dolfinx's
     interpolation between two spaces cost as much as the rest of the output. None for other
-    degrees."""
-    if degree not in (1, 2):
+    degrees and for hexahedra (dolfinx interpolates there)."""
+    if degree not in (1, 2) or compat.cell_name(S.mesh) == "hexahedron":
         return None
     tdim = S.mesh.topology.dim
     imap = S.mesh.topology.index_map(tdim)

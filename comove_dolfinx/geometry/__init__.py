@@ -4,7 +4,8 @@ Every builder makes a triangle mesh in the (x, y) plane (gdim = 2; for the axisy
 radius r and y the axial coordinate z) with straight-sided (order 1) or curved (order 2, mid-side nodes on
 the true arcs) triangles; :func:`box`, :func:`tube_sector` and :func:`sphere_octant` make tetrahedra
 in 3D (gdim = 3, named faces instead of curves, for the model "solid"; order 2 puts the mid-edge nodes
-on the true cylinders and sphere). Lengths are in the user's units (the scenes use cm).
+on the true cylinders and sphere), :func:`box` and :func:`tube_sector` with ``hexahedra=True``
+structured hexahedra (Gmsh's 8-node bricks, or its 27-node ones at order 2). Lengths are in the user's units (the scenes use cm).
 
 Physical groups: one surface group "body" (cell tag ``BODY_TAG``) and one named curve group per boundary
 part; their tag values, distinct per name and numbered from 1 in the order listed by each builder, are in

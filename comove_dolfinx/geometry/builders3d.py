@@ -1,5 +1,5 @@
-"""The Gmsh builders of 3D bodies (tetrahedra with named faces; cached .msh files, see
-geometry/__init__.py)."""
+"""The Gmsh builders of 3D bodies (tetrahedra, or for ``box`` and ``tube_sector`` hexahedra, with
+named faces; cached .msh files, see geometry/__init__.py)."""
 from __future__ import annotations
 
 import math
@@ -13,12 +13,15 @@ from .meshes import BODY_TAG, MeshData, MeshError, add_group, build_cached
 
 
 def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float = 0.0, y0: float = 0.0,
-        z0: float = 0.0, comm: MPI.Comm = MPI.COMM_WORLD, cache_dir: str | os.PathLike = "meshes") -> MeshData:
-    """Structured tetrahedra on [x0, x0+Lx] x [y0, y0+Ly] x [z0, z0+Lz], with named faces.
+        z0: float = 0.0, comm: MPI.Comm = MPI.COMM_WORLD, cache_dir: str | os.PathLike = "meshes",
+        hexahedra: bool = False) -> MeshData:
+    """Structured tetrahedra (or hexahedra) on [x0, x0+Lx] x [y0, y0+Ly] x [z0, z0+Lz], with named faces.
 
     The face z = z0 is meshed as ``rectangle(Lx, Ly, size)`` meshes its rectangle, and its
     triangles are extruded in layers along z, each prism cut into three tetrahedra: every section
     z = const of the mesh is that 2D mesh (a plane-strain comparison meets the same discretisation).
+    With ``hexahedra=True`` the face is a grid of nx x ny quadrilaterals and the extrusion makes
+    nx x ny x nz bricks (order 2: Gmsh's 27-node hexahedra).
 
     Parameters
     ----------
@@ -33,6 +36,8 @@ def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float 
         The corner with the smallest coordinates.
     comm, cache_dir
         As for ``rectangle``.
+    hexahedra
+        Bricks instead of tetrahedra.
 
     Returns
     -------
@@ -43,7 +48,7 @@ def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float 
     _positive(Lx=Lx, Ly=Ly, Lz=Lz, size=size)
     order = _check_order(order)
     params = dict(Lx=float(Lx), Ly=float(Ly), Lz=float(Lz), size=float(size), order=order,
-                  x0=float(x0), y0=float(y0), z0=float(z0))
+                  x0=float(x0), y0=float(y0), z0=float(z0), **_hexahedra(hexahedra))
     _not_too_fine("box", params)
     nx, ny, nz = math.ceil(Lx / size), max(math.ceil(Ly / size), 2), max(math.ceil(Lz / size), 1)
 
@@ -53,8 +58,10 @@ def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float 
              [(x0, y0), (x0 + Lx, y0), (x0 + Lx, y0 + Ly), (x0, y0 + Ly)]]
         front, right, back, left = (geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4))
         bottom = _structured([front, right, back, left], [nx, ny, nx, ny])
+        if hexahedra:
+            geo.mesh.setRecombine(2, bottom)
         # extrude: [top face, volume, the faces swept by front, right, back, left]
-        out = geo.extrude([(2, bottom)], 0.0, 0.0, Lz, numElements=[nz])
+        out = geo.extrude([(2, bottom)], 0.0, 0.0, Lz, numElements=[nz], recombine=bool(hexahedra))
         geo.synchronize()
         add_group(3, [out[1][1]], BODY_TAG, "body")
         faces = {"left": out[5][1], "right": out[3][1], "front": out[2][1], "back": out[4][1],
@@ -63,6 +70,14 @@ def box(Lx: float, Ly: float, Lz: float, size: float, order: int = 2, x0: float 
             add_group(2, [faces[name]], tag, name)
 
     return build_cached("box", params, construct, comm, cache_dir, dim=3)
+
+
+def _hexahedra(hexahedra) -> dict:
+    """The parameter to hash for hexahedra (none for tetrahedra: their cache names stay as they
+    were); MeshError unless True or False."""
+    if not isinstance(hexahedra, bool):
+        raise MeshError(f"hexahedra must be True or False, got {hexahedra!r}")
+    return {"hexahedra": True} if hexahedra else {}
 
 
 def _check_refinement(size: float, size_contact, contact_zone, growth: float) -> dict:
@@ -130,12 +145,49 @@ def _tube_groups(volume: int, r_in: float, r_out: float, length: float, angle: f
         add_group(2, groups[name], tag + 1, name)
 
 
+def _bricks(volume: int, size: float, arc: float, tol: float) -> None:
+    """Make the OCC ``volume`` (six four-sided faces) a transfinite grid of hexahedra: every curve
+    along z or through the wall (straight) gets ceil(its length / size) cells, every arc
+    ceil(``arc`` / size), so that the opposite edges of each face have the same count."""
+    mesh = gmsh.model.mesh
+    faces = gmsh.model.getBoundary([(3, volume)], oriented=False)
+    curves = {abs(c) for _, f in faces for _, c in gmsh.model.getBoundary([(2, f)], oriented=False)}
+    for curve in sorted(curves):
+        ends = [gmsh.model.getValue(0, p, []) for _, p in gmsh.model.getBoundary([(1, curve)])]
+        chord = math.dist(ends[0], ends[1])
+        straight = abs(gmsh.model.occ.getMass(1, curve) - chord) < tol
+        mesh.setTransfiniteCurve(curve, math.ceil((chord if straight else arc) / size) + 1)
+    for _, face in faces:
+        mesh.setTransfiniteSurface(face)
+        mesh.setRecombine(2, face)
+    mesh.setTransfiniteVolume(volume)
+
+
+def _tube_params(r_in, r_out, length, size, angle, order, grading: tuple, hexahedra) -> tuple[dict, dict]:
+    """The parameters of :func:`tube_sector` to hash and those of its refinement (``grading``:
+    size_contact, contact_zone, growth), checked (MeshError naming the value)."""
+    _positive(r_in=r_in, r_out=r_out, length=length, size=size, angle=angle)
+    order = _check_order(order)
+    if not r_in < r_out:
+        raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
+    if not angle <= math.pi:
+        raise MeshError(f"angle must lie in (0, pi] (radians; pi/2 is a quarter), got {angle!r}")
+    refine = _check_refinement(size, *grading)
+    if hexahedra is True and refine:
+        raise MeshError(f"size_contact = {refine['size_contact']!r} grades tetrahedra only: drop it with "
+                        "hexahedra=True (the bricks are uniform; a smaller size refines them all)")
+    params = dict(r_in=float(r_in), r_out=float(r_out), length=float(length), size=float(size),
+                  angle=float(angle), order=order, **refine, **_hexahedra(hexahedra))
+    _not_too_fine("tube_sector", params)
+    return params, refine
+
+
 def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: float = math.pi / 2,
                 order: int = 2, size_contact: float | None = None, contact_zone: float | None = None,
                 growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
-                cache_dir: str | os.PathLike = "meshes") -> MeshData:
+                cache_dir: str | os.PathLike = "meshes", hexahedra: bool = False) -> MeshData:
     """A sector of a thick-walled tube along z: r_in <= r <= r_out, pi/2 - angle <= theta <= pi/2
-    (theta from the x axis), 0 <= z <= length; unstructured tetrahedra.
+    (theta from the x axis), 0 <= z <= length; unstructured tetrahedra, or structured hexahedra.
 
     The sector always contains the top line x = 0, y = r_out, so a transverse tool pressing along -y
     at z = 0 touches the point (0, r_out, 0): ``angle = pi`` with the symmetry faces x = 0 and z = 0
@@ -156,9 +208,13 @@ def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: fl
         Geometry order, 1 or 2 (mid-side nodes on the true cylinders).
     size_contact, contact_zone, growth
         With ``size_contact`` (<= size): elements of that size within ``contact_zone`` of
-        (0, r_out, 0), growing by ``growth`` per unit distance up to ``size``.
+        (0, r_out, 0), growing by ``growth`` per unit distance up to ``size`` (tetrahedra only).
     comm, cache_dir
         As for ``rectangle``.
+    hexahedra
+        A transfinite grid of bricks instead: ceil(angle r_out / size) cells around,
+        ceil((r_out - r_in) / size) through the wall and ceil(length / size) along z (order 2:
+        Gmsh's 27-node hexahedra, their nodes on the true cylinders).
 
     Returns
     -------
@@ -168,16 +224,8 @@ def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: fl
         angle = pi/2 (on y = 0), part of "xsym" for angle = pi (on x = 0, y < 0), "side" otherwise;
         zsym (z = 0), end (z = length). Cells "body" = BODY_TAG.
     """
-    _positive(r_in=r_in, r_out=r_out, length=length, size=size, angle=angle)
-    order = _check_order(order)
-    if not r_in < r_out:
-        raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
-    if not angle <= math.pi:
-        raise MeshError(f"angle must lie in (0, pi] (radians; pi/2 is a quarter), got {angle!r}")
-    refine = _check_refinement(size, size_contact, contact_zone, growth)
-    params = dict(r_in=float(r_in), r_out=float(r_out), length=float(length), size=float(size),
-                  angle=float(angle), order=order, **refine)
-    _not_too_fine("tube_sector", params)
+    params, refine = _tube_params(r_in, r_out, length, size, angle, order, (size_contact, contact_zone, growth),
+                                  hexahedra)
 
     def construct() -> None:
         occ = gmsh.model.occ
@@ -187,6 +235,8 @@ def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: fl
         occ.synchronize()
         _tube_groups(wall[0][1], r_in, r_out, length, angle, 1e-7 * r_out)
         _sizes_near((0.0, r_out, 0.0), size, refine)
+        if hexahedra:
+            _bricks(wall[0][1], size, angle * r_out, 1e-7 * r_out)
 
     return build_cached("tube_sector", params, construct, comm, cache_dir, dim=3)
 

@@ -43,7 +43,7 @@ class MeshData:
     Attributes
     ----------
     mesh : dolfinx.mesh.Mesh
-        The mesh (gdim = 2; gdim = 3 for a 3D mesh of tetrahedra), already passed through
+        The mesh (gdim = 2; gdim = 3 for a 3D mesh of tetrahedra or hexahedra), already passed through
         `fix_coordinate_element`.
     cell_tags, facet_tags : dolfinx.mesh.MeshTags
         Tags of the physical surfaces and curves of the .msh file (in 3D: volumes and surfaces).
@@ -100,7 +100,8 @@ def build_cached(builder: str, params: dict, construct: Callable[[], None], comm
     gmsh model (and synchronizes); this function meshes it, raises its order (``params["order"]``)
     and writes the file under a temporary name, renamed into place. A gmsh failure on rank 0 is
     raised on every rank (MeshError). The builders of this package and the verification cases'
-    meshes use it. ``dim``: the dimension meshed, 2 (triangles) or 3 (tetrahedra). The mesh's
+    meshes use it. ``dim``: the dimension meshed, 2 (triangles) or 3 (tetrahedra, or the hexahedra
+    that ``construct`` asks for with transfinite, recombined entities). The mesh's
     arrays are read from the ``.npz`` beside the ``.msh`` (written at the first read, with gmsh),
     so that gmsh is loaded only to build a mesh or to read one the first time.
     """
@@ -162,7 +163,8 @@ def _groups_of_current_model(path: pathlib.Path, required: Iterable[str]) -> tup
         types = {t for e in entities for t in gmsh.model.mesh.getElementTypes(dim, e)}
         if len(types) > 1:
             raise MeshError(f"{path} mixes element types {sorted(types)} in its {dim}D physical groups; "
-                            "dolfinx 0.5 needs one cell type (all triangles or all quadrilaterals)")
+                            "dolfinx needs one cell type (all triangles or all quadrilaterals; in 3D all "
+                            "tetrahedra or all hexahedra)")
     z = gmsh.model.mesh.getNodes()[1][2::3]
     if top == 2 and z.size and np.abs(z).max() > 0:
         raise MeshError(f"{path} is not in the plane z = 0 (max |z| = {np.abs(z).max():g}); "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .. import compat
 from ..checks import first, number
 from ..choices import PLASTIC_UPDATES as ROTATING_UPDATES  # noqa: E402  (they carry a rotated old stress)
 from .kinematics import MODELS
@@ -23,7 +24,7 @@ class Body:
     ----------
     mesh : geometry.MeshData
         Mesh with named facet groups (``comove_dolfinx.geometry`` builds, reads or wraps one):
-        triangles for the 2D models, tetrahedra for "solid".
+        triangles (or quadrilaterals) for the 2D models, tetrahedra or hexahedra for "solid".
     kind : str
         "plane_strain", "plane_stress" (forces per unit thickness), "axisymmetric" (x = r, y = z;
         forces are totals over the circumference) or "solid" (3D: three displacement components,
@@ -42,7 +43,9 @@ class Body:
         Out-of-plane thickness of plane models (ignored in 3D).
     quadrature_degree : int, optional
         Of the volume integrals, 1 to 30; by default 2 (3 points, exact P2 small-strain stiffness),
-        3 in axisymmetry (the weight r), 1 for P1 (in 3D: 2 for P2, the 4-point rule, 1 for P1).
+        3 in axisymmetry (the weight r), 1 for P1 (in 3D: 2 for P2, the 4-point rule, 1 for P1; on
+        hexahedra the full Gauss rules, 4 (3 x 3 x 3 points) for Q2 and 2 (2 x 2 x 2) for Q1: fewer
+        points leave the bricks modes without stiffness).
 
     Every value is checked here: one that cannot be used raises :class:`BodyError` (or
     ``MaterialError``) naming it and the fix.
@@ -64,7 +67,7 @@ class Body:
             raise BodyError(f"kind = {self.kind!r} is unknown: choose one of {', '.join(MODELS)}")
         dim = self.mesh.mesh.topology.dim
         if (self.kind == "solid") != (dim == 3):
-            want = "a 3D mesh of tetrahedra (cm.box)" if self.kind == "solid" else \
+            want = "a 3D mesh of tetrahedra or hexahedra (cm.box)" if self.kind == "solid" else \
                 "a 2D mesh (or kind = 'solid' for a 3D one)"
             raise BodyError(f"kind = {self.kind!r} on a mesh of dimension {dim}: give {want}")
         if not isinstance(self.material, (Elastic, Plastic)):
@@ -95,5 +98,7 @@ class Body:
     def rule_degree(self) -> int:
         if self.quadrature_degree is not None:
             return self.quadrature_degree
+        if compat.cell_name(self.mesh.mesh) == "hexahedron":
+            return 2 * self.degree
         q = 2 * (self.degree - 1) + (1 if self.kind == "axisymmetric" else 0)
         return max(q, 1 if self.degree == 1 else 2)

@@ -17,8 +17,12 @@ from ..parallel import agree
 from .state import InvertedElement, ReturnMapFailure
 
 
-def _tetrahedron_nodes(degree: int) -> np.ndarray:
-    """The reference tetrahedron's vertices and, for degree 2, its edge midpoints."""
+def _solid_nodes(cell: str, degree: int) -> np.ndarray:
+    """The reference tetrahedron's vertices and, for degree 2, its edge midpoints; the reference
+    hexahedron's nodes (its 8 vertices, or the 27 points of the 3 x 3 x 3 grid for degree 2)."""
+    if cell == "hexahedron":
+        t = np.linspace(0.0, 1.0, degree + 1)
+        return np.array([[x, y, z] for z in t for y in t for x in t])
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     if degree != 2:
         return v
@@ -70,7 +74,8 @@ class StressEvaluation:
         if not m.update.geometric:
             return None
         if m.kin.solid:
-            return compat.expression(ufl.det(ufl.Identity(3) + ufl.grad(m.u)), _tetrahedron_nodes(m.degree))
+            nodes = _solid_nodes(compat.cell_name(m.mesh), m.degree)
+            return compat.expression(ufl.det(ufl.Identity(3) + ufl.grad(m.u)), nodes)
         pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
                        ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if m.degree == 2 else []))
         return compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(m.u)), pts)

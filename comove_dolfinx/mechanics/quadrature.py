@@ -15,8 +15,8 @@ from dolfinx import fem
 
 from .. import compat
 
-_CELLS = {"triangle": basix.CellType.triangle, "quadrilateral": basix.CellType.quadrilateral,
-          "tetrahedron": basix.CellType.tetrahedron}
+_CELLS = {name: getattr(basix.CellType, name) for name in ("triangle", "quadrilateral", "tetrahedron",
+                                                             "hexahedron")}
 
 
 class QuadratureRule:
