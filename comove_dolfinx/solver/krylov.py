@@ -36,9 +36,13 @@ KRYLOV_RTOL = 1e-8
 #: Krylov iterations before a solve stops (``ksp_max_it``)
 KRYLOV_MAX_IT = 500
 #: a solve stopped by the iteration limit is still Newton's step when its true residual has fallen by
-#: this factor (an inexact Newton step: Newton's residual still falls by about as much in that
-#: iteration); one that has not counts as failed (failures.KRYLOV: the increment is halved)
-KRYLOV_ACCEPT = 1e-4
+#: this factor: an inexact Newton step, along which Newton's residual still falls by about as much
+#: (the forcing term of inexact Newton methods; any factor below 1 keeps Newton converging, at a
+#: linear rate), where halving the increment would cost the iterations of two; one that has not
+#: fallen so far counts as failed (failures.KRYLOV: the increment is halved). GAMG's GMRES can
+#: stagnate in a plastic zone, whose tangent is nearly incompressible (the bent block at 230k dofs:
+#: 3.6e-3 after 500 iterations)
+KRYLOV_ACCEPT = 1e-2
 
 _GMRES = {"ksp_type": "gmres", "ksp_pc_side": "right", "ksp_gmres_restart": 100,
           "ksp_rtol": KRYLOV_RTOL, "ksp_atol": 0.0, "ksp_max_it": KRYLOV_MAX_IT}
