@@ -21,7 +21,7 @@ from . import polyline
 from .obstacles import ContactError, Obstacle, Profile, _vector
 
 # r is regularised as sqrt(r^2 + (EPS L)^2), L the profile's size: off the axis it equals r in
-# floating point (r > 1e-1 L exactly, and to round-off from r > 1e-8 L), on the axis it is
+# floating point (exactly from r > L / 10, to round-off from r > 1e-8 L), on the axis it is
 # differentiable (its gradient there is 0)
 EPS = 1e-9
 
@@ -112,7 +112,8 @@ class Revolved(_Swept):
     has a component n_r along the unit vector from the axis to x. On the axis, where that vector
     is undefined, r is regularised by 1e-9 of the profile's size (a change of the gap below
     round-off elsewhere); the gap is differentiable there when the profile's nearest point to the
-    axis is on it or straight across (a tip or a flat face), not at the centre of a ring."""
+    point of the axis lies on the axis (a rounded tip, a flat face across the axis), not when it
+    lies off it (the centre of a ring, where the gap has a conical peak)."""
 
     def __init__(self, profile, axis=(0.0, 0.0, 1.0), origin=(0.0, 0.0, 0.0), motion=None):
         super().__init__(profile, origin, motion, "Revolved")
