@@ -35,7 +35,7 @@ def segments_of(pts: np.ndarray) -> list:
 
 def nearest(segments: list, q, shift=None):
     """The nearest point c of the polyline (its points moved by ``shift``, a UFL 2-vector, if given)
-    to the 2D point q (UFL), and the squared distance |q - c|^2 (UFL).
+    to the 2D point q (UFL), and the squared distance ``|q - c|^2`` (UFL).
 
     Each segment's nearest point is q's projection clamped to the segment; the closest is kept,
     chosen pairwise in a balanced tree: a chain of choices, each referring to the one before,
