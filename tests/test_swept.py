@@ -225,7 +225,8 @@ REFUSED = [
     (lambda: Extruded([(0, 0), (1, 0)]), r"profile = \[\(0, 0\), \(1, 0\)\]: give a Profile"),
     (lambda: Revolved(Profile([(0, 0)], 0.1, motion=(0, 1))), "the Revolved's profile has a motion: give "
                                                               r"motion=\(dx, dy, dz\) to the Revolved"),
-    (lambda: Extruded(Profile([(0, 0)], 0.1), u=(1, 0, 0), v=(2, 0, 0)), "is parallel to u"),
+    (lambda: Extruded(Profile([(0, 0)], 0.1), u=(1, 0, 0), v=(2, 0, 0)),
+     r"v = \(2, 0, 0\) is parallel to u = \(1, 0, 0\)"),
     (lambda: Extruded(Profile([(0, 0)], 0.1), u=(0, 0)), r"the profile's x direction u = \(0, 0\): give 3"),
     (lambda: Extruded(Profile([(0, 0)], 0.1), origin=(0, 0)), r"the Extruded's origin = \(0, 0\): give 3"),
     (lambda: Revolved(Profile([(0, 0)], 0.1), axis=(0, 0, 0)), r"the axis = \(0, 0, 0\) must not be zero"),

@@ -85,12 +85,12 @@ class Extruded(_Swept):
     def __init__(self, profile, u=(1.0, 0.0, 0.0), v=(0.0, 0.0, 1.0), origin=(0.0, 0.0, 0.0), motion=None):
         super().__init__(profile, origin, motion, "Extruded")
         self.u = _direction("the profile's x direction u", u)
-        v = _direction("the profile's y direction v", v)
-        v = v - (v @ self.u) * self.u
-        if np.linalg.norm(v) < 1e-8:
-            raise ContactError(f"v = {tuple(v)!r} is parallel to u = {tuple(u)!r}: give the profile's y "
-                               "direction across its x direction")
-        self.v = v / np.linalg.norm(v)
+        w = _direction("the profile's y direction v", v)
+        w = w - (w @ self.u) * self.u
+        if np.linalg.norm(w) < 1e-8:
+            raise ContactError(f"v = {v!r} is parallel to u = {u!r}: give the profile's y direction across "
+                               "its x direction")
+        self.v = w / np.linalg.norm(w)
         self.axis = np.cross(self.u, self.v)
 
     def _plane(self, x, d):
