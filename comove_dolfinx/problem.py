@@ -34,7 +34,8 @@
     [newton]                     # any NewtonSettings field
     scale = "force"
 
-    [[probes]]                   # node, contact_force, contact_length, contact_peak, reaction, max_plastic_strain
+    [[probes]]                   # node, contact_force, contact_length (contact_area in 3D), contact_peak,
+                                 # reaction, max_plastic_strain
     type = "contact_force"
     item = "plate"
     column = "force"
@@ -55,8 +56,8 @@ import tomllib
 from .checks import mesh_size_error, newton_error
 from .choices import PLASTIC_UPDATES, first_increment_error
 from .mechanics.material_data import Elastic, Hardening, MaterialError
-from .problem_schema import (BUILDER_OPTIONS, BUILDERS, BUILDERS_3D, ITEMS, OBSTACLES, OPTIONAL, PROBES,
-                             REQUIRED, SECTIONS, ProblemError, _check)
+from .problem_schema import (BUILDER_OPTIONS, BUILDERS, BUILDERS_3D, ITEMS, OBSTACLE_REQUIRED, OBSTACLES,
+                             OBSTACLES_2D, OBSTACLES_3D, PROBES, REQUIRED, SECTIONS, ProblemError, _check)
 
 
 def _load(path: pathlib.Path) -> dict:
@@ -155,6 +156,7 @@ def _dimension(path: pathlib.Path, data: dict) -> None:
     tables += [(f"[[items]] {k} ({t['type']}) obstacle", t["obstacle"], OBSTACLES[t["obstacle"]["type"]])
                for k, t in enumerate(data["items"], 1) if t["type"] == "contact"]
     tables += [(f"[[probes]] {k} ({t['type']})", t, PROBES[t["type"]]) for k, t in enumerate(data.get("probes", []), 1)]
+    _of_dimension(path, data, dim)
     for where, table, spec in tables:
         for key, value in table.items():
             if spec.get(key) in ("vector", "vector|number") and isinstance(value, list) and len(value) != dim:
@@ -162,6 +164,22 @@ def _dimension(path: pathlib.Path, data: dict) -> None:
                                    f"{'3D' if solid else '2D'})")
             if key == "component" and value >= dim:
                 raise ProblemError(f"{path}: {where}: component = {value}: the body is 2D, give 0 (x) or 1 (y)")
+
+
+def _of_dimension(path: pathlib.Path, data: dict, dim: int) -> None:
+    """The obstacles and the contact probes of the body's dimension ``dim``."""
+    body = f"the body is {dim}D (kind = {data['body']['kind']!r})"
+    for k, t in enumerate(data["items"], 1):
+        otype = t["obstacle"]["type"] if t["type"] == "contact" else None
+        if otype in (OBSTACLES_2D if dim == 3 else OBSTACLES_3D):
+            use = ", ".join(("plane",) + (OBSTACLES_3D if dim == 3 else OBSTACLES_2D))
+            raise ProblemError(f"{path}: [[items]] {k} (contact) obstacle: type = {otype!r} is a {5 - dim}D "
+                               f"obstacle, {body}: choose one of {use}")
+    wrong = {3: ("contact_length", "contact_area"), 2: ("contact_area", "contact_length")}[dim]
+    for k, t in enumerate(data.get("probes", []), 1):
+        if t["type"] == wrong[0]:
+            raise ProblemError(f"{path}: [[probes]] {k}: type = {wrong[0]!r} is not defined when {body}: "
+                               f"use {wrong[1]}")
 
 
 def _items(path: pathlib.Path, items: list) -> dict:
@@ -192,14 +210,40 @@ def _contact(where: str, path: pathlib.Path, item: dict) -> None:
     obs = item["obstacle"]
     if not isinstance(obs.get("type"), str) or obs["type"] not in OBSTACLES:
         raise ProblemError(f"{where}: obstacle type = {obs.get('type')!r}: choose one of {', '.join(OBSTACLES)}")
-    _check(f"{where} obstacle", obs, {"type": str, **OBSTACLES[obs["type"]]},
-           required=[key for key in OBSTACLES[obs["type"]] if key not in OPTIONAL])
-    if obs["type"] == "plane" and obs["normal"] == [0, 0]:
-        raise ProblemError(f"{where} obstacle: normal = [0, 0]: give a direction towards the body")
+    _check(f"{where} obstacle", obs, {"type": str, **OBSTACLES[obs["type"]]}, required=OBSTACLE_REQUIRED[obs["type"]])
+    for key, what in (("normal", "a direction towards the body"), ("axis", "the axis's direction"),
+                      ("u", "the direction of the profile's x"), ("v", "the direction of the profile's y")):
+        if key in obs and not any(obs[key]):
+            raise ProblemError(f"{where} obstacle: {key} = [{', '.join('0' for _ in obs[key])}]: give {what}")
+    if obs["type"] in ("extruded", "revolved"):
+        _swept(f"{where} obstacle", obs)
     if "file" in obs:
         obs["file"] = str((path.parent / obs["file"]).resolve())
         if not pathlib.Path(obs["file"]).is_file():
             raise ProblemError(f"{where} obstacle: file = {obs['file']!r} does not exist: check the path")
+
+
+def _swept(where: str, obs: dict) -> None:
+    """An extruded or revolved obstacle's profile: its points, or a file and a curve; a revolved
+    profile at x >= 0 (the distance from the axis); an extruded one's u and v across each other."""
+    if ("points" in obs) == ("file" in obs):
+        raise ProblemError(f"{where}: give the profile as points = [[x, y], ...] or as file and curve"
+                           + (", not both" if "points" in obs else ""))
+    if "file" in obs and "curve" not in obs:
+        raise ProblemError(f"{where}: curve is missing: add the name of the file's physical curve")
+    if "points" in obs and ("curve" in obs or "spacing" in obs):
+        raise ProblemError(f"{where}: curve and spacing are for a profile from a file: remove them or give "
+                           "file instead of points")
+    behind = [p for p in obs.get("points", []) if p[0] < 0]
+    if obs["type"] == "revolved" and behind:
+        raise ProblemError(f"{where}: points: {behind[0]} has x < 0: x is the distance from the axis, "
+                           "give x >= 0")
+    u, v = obs.get("u", [1.0, 0.0, 0.0]), obs.get("v", [0.0, 0.0, 1.0])
+    if obs["type"] == "extruded" and len(u) == len(v) == 3:
+        cross = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        if sum(c * c for c in cross) <= 1e-16 * sum(a * a for a in u) * sum(b * b for b in v):
+            raise ProblemError(f"{where}: u = {u} and v = {v} are parallel: give the profile's y direction v "
+                               "across its x direction u")
 
 
 def _steps(path: pathlib.Path, data: dict, names: dict) -> None:
@@ -303,8 +347,12 @@ def _item(spec: dict):
     otype = o.pop("type")
     if "file" in o:
         o["path"] = o.pop("file")
-    obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile,
-                "gmsh_profile": c.Profile.from_gmsh}[otype](**o)
+    if otype in ("extruded", "revolved"):
+        source = {k: o.pop(k) for k in ("points", "path", "curve", "radius", "spacing") if k in o}
+        o["profile"] = (c.Profile(source["points"], source["radius"]) if "points" in source
+                        else c.Profile.from_gmsh(**source))
+    obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile, "gmsh_profile": c.Profile.from_gmsh,
+                "sphere": c.Sphere, "cylinder": c.Cylinder, "extruded": c.Extruded, "revolved": c.Revolved}[otype](**o)
     return c.Contact(s.pop("boundary"), obstacle, **s)
 
 
@@ -318,6 +366,8 @@ def _probe(s: dict, named: dict, dim: int = 2):
         return probes.ContactForce(named[s["item"]], s.get("column", "contact_force"), s.get("component", 1), scale)
     if kind == "contact_length":
         return probes.ContactLength(named[s["item"]], s.get("column", "contact_length"), scale)
+    if kind == "contact_area":
+        return probes.ContactArea(named[s["item"]], s.get("column", "contact_area"), scale)
     if kind == "contact_peak":
         return probes.ContactPeak(named[s["item"]], s.get("column", "peak_pressure"), scale)
     if kind == "reaction":

@@ -33,14 +33,25 @@ ITEMS = {"fixed": {"boundary": str, "component": int},
                      "mu": float, "relag": bool, "friction": str, "gamma0_t": float, "max_passes": int,
                      "relag_tol": float}}
 REQUIRED = ("boundary", "p", "vector", "point", "obstacle", "value")
+_SWEPT = {"points": "points", "file": str, "curve": str, "radius": float, "spacing": float}
 OBSTACLES = {"plane": {"point": "vector", "normal": "vector", "motion": "vector"},
              "circle": {"centre": "vector", "radius": float, "motion": "vector"},
              "profile": {"points": "points", "radius": float, "motion": "vector"},
-             "gmsh_profile": {"file": str, "curve": str, "radius": float, "spacing": float, "motion": "vector"}}
-OPTIONAL = ("motion", "spacing")
+             "gmsh_profile": {"file": str, "curve": str, "radius": float, "spacing": float, "motion": "vector"},
+             "sphere": {"centre": "vector", "radius": float, "motion": "vector"},
+             "cylinder": {"point": "vector", "axis": "vector", "radius": float, "motion": "vector"},
+             "extruded": {**_SWEPT, "u": "vector", "v": "vector", "origin": "vector", "motion": "vector"},
+             "revolved": {**_SWEPT, "axis": "vector", "origin": "vector", "motion": "vector"}}
+#: the keys an obstacle must have (extruded and revolved: points, or file and curve, besides)
+OBSTACLE_REQUIRED = {"plane": ("point", "normal"), "circle": ("centre", "radius"), "profile": ("points", "radius"),
+                     "gmsh_profile": ("file", "curve", "radius"), "sphere": ("centre", "radius"),
+                     "cylinder": ("point", "axis", "radius"), "extruded": ("radius",), "revolved": ("radius",)}
+#: the obstacles of 2D bodies and of 3D ones (plane: both)
+OBSTACLES_2D, OBSTACLES_3D = ("circle", "profile", "gmsh_profile"), ("sphere", "cylinder", "extruded", "revolved")
 PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": str},
           "contact_force": {"item": str, "column": str, "component": int, "scale": float},
           "contact_length": {"item": str, "column": str, "scale": float},
+          "contact_area": {"item": str, "column": str, "scale": float},
           "contact_peak": {"item": str, "column": str, "scale": float},
           "reaction": {"boundary": str, "name": str},
           "max_plastic_strain": {}}

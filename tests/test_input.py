@@ -232,6 +232,11 @@ BAD_KEYS = [
     ("normal = [0.0, -1.0]", "normal = [0.0, 0.0]", "normal = [0, 0]: give a direction"),
     ('builder = "rectangle"', 'builder = ["rectangle"]', "builder = ['rectangle']: choose one of rectangle"),
     ('type = "fixed"', 'type = ["fixed"]', "[[items]] 1: type = ['fixed']: choose one of fixed"),
+    ('type = "plane", point = [0.0, 1.0], normal = [0.0, -1.0]', 'type = "sphere", centre = [0.0, 2.0], radius = 1.0',
+     "[[items]] 3 (contact) obstacle: type = 'sphere' is a 3D obstacle, the body is 2D (kind = 'plane_strain'): "
+     "choose one of plane, circle, profile, gmsh_profile"),
+    ('type = "contact_force"', 'type = "contact_area"',
+     "[[probes]] 1: type = 'contact_area' is not defined when the body is 2D (kind = 'plane_strain'): use contact_length"),
 ]
 
 

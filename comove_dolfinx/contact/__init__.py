@@ -2,6 +2,7 @@
 from ..choices import CONTACT_METHODS as METHODS
 from .item import FACET_DEGREE, Contact, ZoneInfo
 from .obstacles import Circle, ContactError, Cylinder, Obstacle, Plane, Profile, Sphere
+from .swept import Extruded, Revolved
 
-__all__ = ["FACET_DEGREE", "METHODS", "Circle", "Contact", "ContactError", "Cylinder", "Obstacle", "Plane",
-           "Profile", "Sphere", "ZoneInfo"]
+__all__ = ["FACET_DEGREE", "METHODS", "Circle", "Contact", "ContactError", "Cylinder", "Extruded", "Obstacle",
+           "Plane", "Profile", "Revolved", "Sphere", "ZoneInfo"]

@@ -97,7 +97,7 @@ class Contact(Item):
             raise ContactError(why)
         if not isinstance(obstacle, Obstacle):
             raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile (2D), or a "
-                               "Plane, Sphere or Cylinder (3D)")
+                               "Plane, Sphere, Cylinder, Extruded or Revolved (3D)")
         if friction not in FRICTION_LAWS:
             raise ContactError(f"friction = {friction!r} is unknown: choose coulomb (the current pressure) "
                                "or lagged (the last increment's)")
@@ -120,8 +120,8 @@ class Contact(Item):
         parts."""
         dim, obs = ctx.mesh.topology.dim, self.obstacle
         if obs.dim != dim:
-            fix = ("give a 3D obstacle: Plane with 3-vectors, Sphere or Cylinder" if dim == 3 else
-                   "give a 2D obstacle: Plane with 2-vectors, Circle or Profile")
+            fix = ("give a 3D obstacle: Plane with 3-vectors, Sphere, Cylinder, Extruded or Revolved"
+                   if dim == 3 else "give a 2D obstacle: Plane with 2-vectors, Circle or Profile")
             raise ContactError(f"contact on {self.boundary!r}: the obstacle {type(obs).__name__} is {obs.dim}D, "
                                f"the body {dim}D: {fix}")
         self.comm, self.u, self._u_n = ctx.mesh.comm, ctx.u, ctx.u_n

@@ -1,5 +1,5 @@
 """Rigid obstacles: a plane, a circle (cylinder), a profile with rounded corners in 2D; a plane, a
-sphere and a cylinder in 3D; each can move.
+sphere and a cylinder in 3D (and a profile extruded or revolved: swept.py); each can move.
 
 An obstacle gives, for the current position x = X + u of a boundary point, the signed gap g (>= 0 when
 apart, < 0 when penetrating) and the unit normal n_o pointing from the obstacle to the body's side
@@ -11,14 +11,13 @@ its body's.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import ufl
 from dolfinx import fem
 from petsc4py import PETSc
 
 from ..checks import is_number, number
+from . import polyline
 
 
 class ContactError(ValueError):
@@ -164,20 +163,17 @@ class Profile(Obstacle):
 
     The gap is the distance to the polyline minus the radius (the nearest segment wins), the normal
     points from the polyline's nearest point to x: both are continuous across the corners, where
-    the profile is an arc of the radius (docs/theory.md section 6.1).
+    the profile is an arc of the radius (docs/theory.md section 6.1). A 2D obstacle; in 3D it
+    makes :class:`Extruded` and :class:`Revolved` bodies.
     """
 
     def __init__(self, points, radius: float, motion=None):
         super().__init__(motion)
-        flat = np.ravel(np.asarray(points, dtype=object))
-        ok = len(flat) % 2 == 0 and all(is_number(v) for v in flat)
-        pts = np.asarray(points, dtype=float).reshape(-1, 2) if ok else np.zeros((0, 2))
-        if len(pts) < 1 or not np.all(np.isfinite(pts)):
-            raise ContactError(f"points = {points!r}: give a polyline of finite (x, y) points")
+        pts = polyline.polyline_points(points, ContactError)
         if number("radius", radius, gt=0):
             raise ContactError(f"radius = {radius!r}: the corners' radius must be a finite number > 0")
         self.points, self.radius = pts, float(radius)
-        self.segments = [(pts[i], pts[i + 1]) for i in range(len(pts) - 1)] or [(pts[0], pts[0])]
+        self.segments = polyline.segments_of(pts)
 
     @classmethod
     def from_gmsh(cls, path, curve, radius: float, spacing: float | None = None, motion=None) -> "Profile":
@@ -197,66 +193,11 @@ class Profile(Obstacle):
         spacing = radius if spacing is None else spacing
         if number("spacing", spacing, gt=0):
             raise ContactError(f"spacing = {spacing!r}: give a finite number > 0")
-        spacing = float(spacing)
-        from ..geometry import gmsh_session
-        gmsh = gmsh_session.gmsh
-        gmsh_session.start()
-        try:
-            try:
-                gmsh.open(str(path))
-            except Exception as err:                  # noqa: BLE001 - gmsh raises plain Exception
-                raise ContactError(f"profile file {path}: gmsh cannot read it ({err})") from None
-            if isinstance(curve, str):
-                groups = {gmsh.model.getPhysicalName(1, t): t for _, t in gmsh.model.getPhysicalGroups(1)}
-                if curve not in groups:
-                    raise ContactError(f"profile file {path}: no physical curve named {curve!r}; the named "
-                                       f"curves are {', '.join(sorted(groups)) or 'none'}")
-                tags = list(gmsh.model.getEntitiesForPhysicalGroup(1, groups[curve]))
-            else:
-                tags = [int(t) for t in curve]
-                known = {t for _, t in gmsh.model.getEntities(1)}
-                if not tags or any(t not in known for t in tags):
-                    raise ContactError(f"profile file {path}: curve tags {tags}: the file's curves are "
-                                       f"{sorted(known)}")
-            pieces = []
-            for tag in tags:
-                lo, hi = (float(v[0]) for v in gmsh.model.getParametrizationBounds(1, tag))
-                fine = np.reshape(gmsh.model.getValue(1, tag, np.linspace(lo, hi, 401)), (-1, 3))[:, :2]
-                length = float(np.linalg.norm(np.diff(fine, axis=0), axis=1).sum())
-                n = max(int(math.ceil(length / spacing)), 1)
-                pieces.append(np.reshape(gmsh.model.getValue(1, tag, np.linspace(lo, hi, n + 1)), (-1, 3))[:, :2])
-        finally:
-            gmsh_session.stop()
-        return cls(_chain(pieces, path), radius, motion)
+        return cls(polyline.read_gmsh(path, curve, float(spacing), ContactError), radius, motion)
 
     def _nearest(self, x, d):
-        """Nearest point of the polyline to x (UFL): the segments' nearest points, the closest kept,
-        chosen pairwise in a balanced tree (a chain of choices, each referring to the one before,
-        makes the differentiated form grow exponentially with the segments; the tree keeps its depth
-        at log2 of their number)."""
-        d = self.d if d is None else d
-        cands = []
-        for a, b in self.segments:
-            a_, ab = ufl.as_vector(a) + d, b - a
-            L2 = float(ab @ ab)
-            if L2 > 0.0:
-                s = ufl.dot(x - a_, ufl.as_vector(ab)) / L2
-                s = ufl.min_value(ufl.max_value(s, 0.0), 1.0)
-                c = a_ + s * ufl.as_vector(ab)
-            else:
-                c = a_
-            r = x - c
-            cands.append((c, ufl.dot(r, r)))
-        while len(cands) > 1:
-            merged = []
-            for (c1, d1), (c2, d2) in zip(cands[0::2], cands[1::2]):
-                closer = ufl.lt(d2, d1)
-                merged.append((ufl.as_vector([ufl.conditional(closer, c2[i], c1[i]) for i in range(2)]),
-                               ufl.conditional(closer, d2, d1)))
-            if len(cands) % 2:
-                merged.append(cands[-1])
-            cands = merged
-        return cands[0]
+        """Nearest point of the polyline to x and the squared distance to it (UFL; polyline.nearest)."""
+        return polyline.nearest(self.segments, x, self.d if d is None else d)
 
     def gap(self, x, d=None):
         _, d2 = self._nearest(x, d)
@@ -267,13 +208,7 @@ class Profile(Obstacle):
         return (x - c) / ufl.sqrt(d2)
 
     def gap_np(self, x, d):
-        dist = np.full(len(x), np.inf)
-        for a, b in self.segments:
-            ab = b - a
-            L2 = float(ab @ ab)
-            s = np.clip((x - a - d) @ ab / L2, 0.0, 1.0) if L2 > 0 else np.zeros(len(x))
-            dist = np.minimum(dist, np.linalg.norm(x - a - d - s[:, None] * ab, axis=1))
-        return dist - self.radius
+        return polyline.distance_np(self.segments, x, d) - self.radius
 
 
 class Cylinder(_Round):
@@ -302,21 +237,3 @@ class Cylinder(_Round):
         r = x - self.point - d
         r = r - np.outer(r @ self.axis, self.axis)
         return np.linalg.norm(r, axis=1) - self.radius
-
-
-def _chain(pieces: list[np.ndarray], path) -> np.ndarray:
-    """The sampled curves joined end to end into one polyline (a curve is reversed to continue the
-    chain; the first is turned to meet the second)."""
-    scale = max(float(np.ptp(np.concatenate(pieces), axis=0).max()), 1.0)
-    tol = 1e-8 * scale
-    line = pieces[0]
-    if len(pieces) > 1 and min(np.linalg.norm(line[0] - pieces[1][[0, -1]], axis=1)) < tol:
-        line = line[::-1]
-    for k, p in enumerate(pieces[1:], 2):
-        if np.linalg.norm(p[-1] - line[-1]) < tol:
-            p = p[::-1]
-        if np.linalg.norm(p[0] - line[-1]) >= tol:
-            raise ContactError(f"profile file {path}: curve {k} of the chain does not start where curve "
-                               f"{k - 1} ends: list the curves in order along the profile")
-        line = np.vstack([line, p[1:]])
-    return line
