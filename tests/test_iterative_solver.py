@@ -111,10 +111,13 @@ def test_a_krylov_solve_stopped_near_its_tolerance_is_an_inexact_newton_step(dir
     rows = _nodal(model)
     assert np.abs(rows[:, 2:] - ref[:, 2:]).max() <= 1e-6 * np.abs(ref[:, 2:]).max()
 
-def test_linear_solver_names_are_checked_and_auto_keeps_mumps_in_2d():
+
+def test_linear_solver_names_are_checked_and_auto_is_the_default_by_size():
     with pytest.raises(SettingsError, match="linear_solver = 'ilu'"):
         NewtonSettings(linear_solver="ilu")
     assert krylov.chosen("auto", 10 ** 9, 2) == "mumps"
+    assert NewtonSettings().linear_solver == "auto"
+    assert krylov.chosen("auto", 199_999, 3) == "mumps" and krylov.chosen("auto", 200_000, 3) == "gamg"
     assert krylov.chosen("hypre", 10, 2) == "hypre"
 
 

@@ -2,11 +2,12 @@
 
 ``NewtonSettings.linear_solver`` chooses the linear solver by name (:data:`LINEAR_SOLVERS`):
 
-* ``"mumps"`` (the default): the direct solve of linear.py (preonly, LU, MUMPS);
+* ``"mumps"``: the direct solve of linear.py (preonly, LU, MUMPS);
 * ``"gamg"``: GMRES preconditioned by PETSc's smoothed-aggregation multigrid (:data:`GAMG`);
 * ``"hypre"``: GMRES preconditioned by hypre's BoomerAMG with nodal coarsening and the vector
   interpolation that uses the rigid-body modes (:data:`HYPRE`);
-* ``"auto"``: MUMPS below :data:`AUTO_DOFS` dofs of the body's dimension, GAMG from there on.
+* ``"auto"`` (the default): MUMPS below :data:`AUTO_DOFS` dofs of the body's dimension, GAMG from
+  there on (2-D bodies: MUMPS at every size; 3-D bodies: GAMG from 200k dofs).
 
 The name gives a set of PETSc options (keys without the prefix ``comove_``); the settings'
 ``petsc_options`` and PETSc's database (``PETSC_OPTIONS``) are read after them and win, so that
@@ -61,10 +62,13 @@ HYPRE = {**_GMRES, "pc_type": "hypre", "pc_hypre_type": "boomeramg",
          "pc_hypre_boomeramg_coarsen_type": "HMIS", "pc_hypre_boomeramg_interp_type": "ext+i",
          "pc_hypre_boomeramg_strong_threshold": 0.25, "pc_hypre_boomeramg_P_max": 4}
 PRESETS = {"mumps": {}, "gamg": GAMG, "hypre": HYPRE}
-#: "auto" takes GAMG from this many dofs on (per dimension of the body; None: MUMPS at every size).
-#: 2-D: MUMPS was faster per Newton iteration at every size measured (docs/performance.md, the
-#: iterative solvers); 3-D: MUMPS up to 230k dofs at least (the same section, "3D bodies").
-AUTO_DOFS = {2: None, 3: None}
+#: "auto" (the default) takes GAMG from this many dofs on (per dimension of the body; None: MUMPS at
+#: every size). 2-D: MUMPS was faster per Newton iteration at every size measured
+#: (docs/performance.md, the iterative solvers). 3-D: on the bent block (docs/solids.md, the
+#: scaling table) MUMPS is faster at 56k dofs, the two cost the same per iteration at 230k with the
+#: same Newton iterations, where GAMG needs a sixth of MUMPS's memory (0.9 GB against 5.3 GB), and
+#: MUMPS's factors outgrow a workstation's memory soon after
+AUTO_DOFS = {2: None, 3: 200_000}
 
 
 def chosen(name: str, dofs: int, dim: int) -> str:

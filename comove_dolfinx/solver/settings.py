@@ -35,7 +35,7 @@ class NewtonSettings:
                                    # residual of the run; "force", ||F_int|| of the iterate
     petsc_options: dict = field(default_factory=dict)   # the linear solver's PETSc options, keys
                                    # without the prefix comove_: {"pc_factor_mat_solver_type": "petsc"}
-    linear_solver: str = "mumps"   # "mumps", "gamg", "hypre" (GMRES + algebraic multigrid) or "auto"
+    linear_solver: str = "auto"    # "mumps", "gamg", "hypre" (GMRES + algebraic multigrid) or "auto" (by size)
                                    # (by the number of dofs): krylov.py; petsc_options come after it
     monitor: object | None = None  # an observer of the iterations (methods iteration, rejected,
                                    # solved: the module docstring), e.g. stability.Recorder
