@@ -1,0 +1,125 @@
+"""2D bodies on quadrilaterals (Q1 and Q2, Gmsh's 4- and 9-node quadrangles): the contact's nodal
+pressure field against the closed form of uniform compression, and det F checked at every node of
+the quadrilateral (an inverted corner that a triangle's nodes would miss)."""
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+
+from comove_dolfinx import compat
+from comove_dolfinx.contact import Contact, Plane
+from comove_dolfinx.geometry.gmsh_session import gmsh
+from comove_dolfinx.geometry.meshes import BODY_TAG, add_group, build_cached
+from comove_dolfinx.loads import Displacement, Fixed
+from comove_dolfinx.mechanics.body import Body
+from comove_dolfinx.mechanics.material_data import Elastic
+from comove_dolfinx.mechanics.model import Model
+from comove_dolfinx.solver import IncrementalSolver, NewtonSettings, StepSettings
+
+E, NU = 1000.0, 0.3
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    return MPI.COMM_WORLD.bcast(str(tmp_path_factory.mktemp("quadmeshes")), root=0)
+
+
+def quad_rectangle(L: float, H: float, nx: int, ny: int, order: int, cache: str):
+    """[0, L] x [0, H] as an nx x ny grid of quadrilaterals (order 2: 9-node ones), with the edges
+    "left", "right", "bottom", "top"."""
+    def construct() -> None:
+        geo = gmsh.model.geo
+        p = [geo.addPoint(x, y, 0.0) for x, y in [(0.0, 0.0), (L, 0.0), (L, H), (0.0, H)]]
+        bottom, right, top, left = (geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4))
+        surface = geo.addPlaneSurface([geo.addCurveLoop([bottom, right, top, left])])
+        for curve, n in ((bottom, nx), (top, nx), (left, ny), (right, ny)):
+            geo.mesh.setTransfiniteCurve(curve, n + 1)
+        geo.mesh.setTransfiniteSurface(surface)
+        geo.mesh.setRecombine(2, surface)
+        geo.synchronize()
+        add_group(2, [surface], BODY_TAG, "body")
+        for tag, (name, curve) in enumerate([("left", left), ("right", right), ("bottom", bottom),
+                                             ("top", top)], start=1):
+            add_group(1, [curve], tag, name)
+
+    params = dict(L=float(L), H=float(H), nx=nx, ny=ny, order=order)
+    return build_cached("quad_rectangle", params, construct, MPI.COMM_WORLD, cache)
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_the_mesh_is_of_quadrilaterals(cache, degree):
+    md = quad_rectangle(1.0, 0.5, 4, 2, degree, cache)
+    assert compat.cell_name(md.mesh) == "quadrilateral"
+    assert compat.geometry_degree(md.mesh) == degree
+    assert md.mesh.comm.allreduce(md.mesh.topology.index_map(2).size_local, op=MPI.SUM) == 8
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("side", ["bottom", "top"])
+@pytest.mark.parametrize("degree", [1, 2])
+def test_compression_on_a_frictionless_plane_gives_the_uniform_pressure_at_every_node(cache, degree, side):
+    """A block (plane strain, small strain) pressed onto a plane (Nitsche, frictionless, consistent)
+    by its opposite edge moved towards it by d, its sides free: uniaxial stress with eps_zz = 0, so
+    the contact pressure is E d / (H (1 - nu^2)) everywhere, and the nodal pressure field holds it
+    at every node of the contact boundary (the corners of Q1, the vertices and edge midpoints of
+    Q2), with either edge in contact (the corners at every place in the cells' vertex order)."""
+    d, L, H = 0.01, 1.0, 0.5
+    md = quad_rectangle(L, H, 4, 2, degree, cache)
+    y0, sign = (0.0, 1.0) if side == "bottom" else (H, -1.0)
+    c = Contact(side, Plane((0.0, y0), (0.0, sign)), method="nitsche", gamma0=10.0)
+    pushed = "top" if side == "bottom" else "bottom"
+    m = Model(Body(md, "plane_strain", Elastic(E, NU), update="small_strain", degree=degree),
+              [Fixed("left", component=0), Displacement(pushed, -sign * d, component=1), c])
+    m.finalize()
+    res = IncrementalSolver(m, StepSettings(n_increments=1), NewtonSettings(rtol=1e-12, atol=1e-12)).run()
+    assert res.completed, res.message
+    p = E * d / (H * (1.0 - NU ** 2))
+    assert sign * c.force()[1] == pytest.approx(p * L, rel=1e-9)
+    X, values = c.boundary_values("pressure")
+    assert len(X) == 4 * degree + 1                      # every node of the contact edge
+    np.testing.assert_allclose(values, p, rtol=1e-9)
+    field = c.pressure.x.array                           # zero away from the contact boundary
+    off = ~np.isclose(c.pressure.function_space.tabulate_dof_coordinates()[:, 1], y0)
+    assert np.all(field[off] == 0.0)
+
+
+def _bilinear_corner_motion(V, corner: np.ndarray, move: np.ndarray, L: float = 1.0):
+    """The displacement that moves the vertex ``corner`` of the square [0, L]^2 by ``move``, the
+    other three vertices held: ``move`` times that corner's bilinear hat function (exact in Q1, Q2)."""
+    def u(x):
+        hat = np.ones(x.shape[1])
+        for k in range(2):
+            hat *= x[k] / L if corner[k] > 0 else 1.0 - x[k] / L
+        return np.outer(move, hat)
+    f = fem.Function(V)
+    f.interpolate(u)
+    return f
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_det_F_is_checked_at_every_node_of_the_quadrilateral(cache, degree):
+    """One square cell [0, 1]^2 whose vertex at the reference point (1, 1) moves by 0.8 of the side
+    towards the opposite vertex, the other three held (u = that motion times the vertex's hat
+    function x y in reference coordinates, so F = I + u_corner (y, x)): det F there is
+    0.2^2 - 0.8^2 < 0, the cell folds, while at the reference triangle's nodes, the vertices
+    (0, 0), (1, 0), (0, 1) and for P2 the midpoints (0.5, 0.5), (0, 0.5), (0.5, 0), it is
+    1, 0.2, 0.2 and 0.2, 0.6, 0.6: the check at the quadrilateral's own nodes finds the fold, and
+    at half the motion (det F = 1 - 0.8 (x + y) + ... > 0 at every node) it finds none."""
+    md = quad_rectangle(1.0, 1.0, 1, 1, degree, cache)
+    m = Model(Body(md, "plane_strain", Elastic(E, NU), update="sr", degree=degree), [Fixed("left")])
+    m.finalize()
+    # the physical vertex at the cell's reference (1, 1): its fourth geometry node
+    corner = md.mesh.geometry.x[compat.geometry_dofs(md.mesh)[0, 3], :2]
+    m.u.x.array[:] = _bilinear_corner_motion(m.u.function_space, corner, -0.8 * np.sign(corner - 0.5)).x.array
+    # at the triangle's reference nodes the map does not fold
+    detF = ufl.det(ufl.Identity(2) + ufl.grad(m.u))
+    tri = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] + ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if degree == 2 else []))
+    at_tri = compat.evaluate(compat.expression(detF, tri), md.mesh, np.array([0], dtype=np.int32)).ravel()
+    np.testing.assert_allclose(np.sort(at_tri), np.sort([1.0, 0.2, 0.2] + ([0.2, 0.6, 0.6] if degree == 2 else [])),
+                               rtol=1e-10)
+    message = m.folded_at_nodes()
+    assert message is not None and message.startswith(f"det F = {0.2 ** 2 - 0.8 ** 2:.3g} <= 0 at a node")
+    # unfolded: half that motion keeps det F > 0 at every node
+    m.u.x.array[:] *= 0.5
+    assert m.folded_at_nodes() is None
