@@ -1,6 +1,6 @@
 """2D bodies on quadrilaterals (Q1 and Q2, Gmsh's 4- and 9-node quadrangles): the contact's nodal
-pressure field against the closed form of uniform compression, and det F checked at every node of
-the quadrilateral (an inverted corner that a triangle's nodes would miss)."""
+pressure field against the closed form of uniform compression, det F checked at every node of the
+quadrilateral (an inverted corner that a triangle's nodes would miss), the VTK output read back."""
 import numpy as np
 import pytest
 import ufl
@@ -123,3 +123,35 @@ def test_det_F_is_checked_at_every_node_of_the_quadrilateral(cache, degree):
     # unfolded: half that motion keeps det F > 0 at every node
     m.u.x.array[:] *= 0.5
     assert m.folded_at_nodes() is None
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_vtk_of_quadrilaterals(cache, tmp_path, degree):
+    """Read back with meshio: 4-node quadrilaterals (VTK_QUAD) or 9-node ones
+    (VTK_BIQUADRATIC_QUAD), each cell's nodes at VTK's own parametric coordinates of its type (asked
+    of VTK) in the rectangle; the points are the reference nodes, the displacement at each is G X
+    (a homogeneous deformation, which Q1 and Q2 hold exactly)."""
+    import meshio
+    cells_vtk = pytest.importorskip("vtkmodules.vtkCommonDataModel")
+    import comove_dolfinx as cm
+    G = np.array([[2.0e-3, 1.2e-3], [-0.6e-3, 0.9e-3]])
+    md = quad_rectangle(1.0, 0.5, 4, 2, degree, cache)
+    items = [cm.Displacement(edge, field=lambda x, t: t * (G @ x[:2])) for edge in ("left", "right", "bottom", "top")]
+    body = cm.Body(md, "plane_strain", cm.Elastic(E, NU), degree=degree, update="small_strain")
+    folder = MPI.COMM_WORLD.bcast(str(tmp_path / "out"), root=0)
+    assert cm.Job(body, items, [cm.Step(2)], writers=[cm.VTK(folder)]).run().completed
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    m = meshio.read(f"{folder}/results_00001.vtu")
+    kind = {1: "quad", 2: "quad9"}[degree]
+    assert list(m.cells_dict) == [kind]
+    cells, X = m.cells_dict[kind], m.points
+    assert cells.shape == (8, {1: 4, 2: 9}[degree])
+    cell = {1: cells_vtk.vtkQuad, 2: cells_vtk.vtkBiQuadraticQuad}[degree]()
+    p = cell.GetParametricCoords()
+    ref = np.array([p[i] for i in range(3 * cells.shape[1])]).reshape(-1, 3)
+    low, high = X[cells[:, 0]], X[cells[:, 2]]          # VTK's vertices 0 and 2: opposite corners
+    np.testing.assert_allclose(X[cells], low[:, None, :] + ref[None, :, :] * (high - low)[:, None, :], atol=1e-12)
+    assert np.prod((high - low)[:, :2], axis=1).sum() == pytest.approx(0.5, rel=1e-10)   # they fill the rectangle
+    np.testing.assert_allclose(m.point_data["displacement"][:, :2], X[:, :2] @ G.T, atol=1e-12)
+    assert np.all(m.point_data["displacement"][:, 2] == 0.0)
