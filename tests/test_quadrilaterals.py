@@ -155,3 +155,23 @@ def test_vtk_of_quadrilaterals(cache, tmp_path, degree):
     assert np.prod((high - low)[:, :2], axis=1).sum() == pytest.approx(0.5, rel=1e-10)   # they fill the rectangle
     np.testing.assert_allclose(m.point_data["displacement"][:, :2], X[:, :2] @ G.T, atol=1e-12)
     assert np.all(m.point_data["displacement"][:, 2] == 0.0)
+
+
+@pytest.mark.parametrize("kind", ["plane_strain", "axisymmetric"])
+@pytest.mark.parametrize("degree", [1, 2])
+def test_the_default_rule_leaves_only_the_rigid_motions_without_stiffness(cache, degree, kind):
+    """The stiffness of a free 2 x 1 block of quadrilaterals (small strain, no support) has exactly
+    the rigid motions in its kernel: 3 in the plane (two translations and the rotation), 1 in
+    axisymmetry (the axial translation). A rule with too few points (1 point on Q1, 2 x 2 on Q2)
+    leaves further modes without stiffness (the hourglass modes), which this count finds."""
+    md = quad_rectangle(1.0, 0.5, 2, 1, degree, cache)
+    md.mesh.geometry.x[:, 0] += 0.5 if kind == "axisymmetric" else 0.0     # off the axis r = 0
+    m = Model(Body(md, kind, Elastic(E, NU), update="small_strain", degree=degree))
+    m.finalize()
+    m.evaluate_stress(True)
+    A = compat.create_matrix(m.jacobian_form)
+    compat.assemble_matrix(A, m.jacobian_form)
+    K = A.convert("dense").getDenseArray()
+    eig = np.linalg.eigvalsh(0.5 * (K + K.T))
+    zero = int(np.sum(np.abs(eig) < 1e-10 * np.abs(eig).max()))
+    assert zero == {"plane_strain": 3, "axisymmetric": 1}[kind], eig[:6]
