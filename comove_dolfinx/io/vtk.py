@@ -41,11 +41,11 @@ from .xdmf import FibreStress, stress_tensors, von_mises
 # vertices 0-3, then the edges 2-3, 1-3, 1-2, 0-3, 0-2, 0-1; VTK's quadratic tetrahedron: vertices,
 # then the edges 0-1, 1-2, 0-2, 0-3, 1-3, 2-3. dolfinx's quadrilateral: vertices in tensor order
 # (x fastest), for Q2 then the edges 0-1, 0-2, 1-3, 2-3 and the centre; VTK's (bi)quadratic quad
-# (type 28): vertices counter-clockwise, the edges 0-1, 1-2, 2-3, 3-0, the centre. dolfinx's hexahedron: vertices in tensor order (x
-# fastest), for Q2 then the edges, the faces and the centre (basix's numbering); VTK's (tri)quadratic
-# hexahedron (type 29, ParaView draws it curved): vertices counter-clockwise at z = 0, then z = 1,
-# the edges 0-1, 1-2, 2-3, 3-0 (z = 0), the same at z = 1, the edges along z, the faces x = 0,
-# x = 1, y = 0, y = 1, z = 0, z = 1, the centre.
+# (type 28): vertices counter-clockwise, the edges 0-1, 1-2, 2-3, 3-0, the centre. dolfinx's
+# hexahedron: vertices in tensor order (x fastest), for Q2 then the edges, the faces and the centre
+# (basix's numbering); VTK's (tri)quadratic hexahedron (type 29, ParaView draws it curved):
+# vertices counter-clockwise at z = 0, then z = 1, the edges 0-1, 1-2, 2-3, 3-0 (z = 0), the same
+# at z = 1, the edges along z, the faces x = 0, x = 1, y = 0, y = 1, z = 0, z = 1, the centre.
 _VTK_CELLS = {(2, 3): ("triangle", None), (2, 6): ("triangle6", [0, 1, 2, 5, 3, 4]),
               (2, 4): ("quad", [0, 1, 3, 2]), (2, 9): ("quad9", [0, 1, 3, 2, 4, 6, 7, 5, 8]),
               (3, 4): ("tetra", None), (3, 10): ("tetra10", [0, 1, 2, 3, 9, 6, 8, 7, 5, 4]),
