@@ -101,11 +101,10 @@ def _bilinear_corner_motion(V, corner: np.ndarray, move: np.ndarray, L: float = 
 def test_det_F_is_checked_at_every_node_of_the_quadrilateral(cache, degree):
     """One square cell [0, 1]^2 whose vertex at the reference point (1, 1) moves by 0.8 of the side
     towards the opposite vertex, the other three held (u = that motion times the vertex's hat
-    function x y in reference coordinates, so F = I + u_corner (y, x)): det F there is
-    0.2^2 - 0.8^2 < 0, the cell folds, while at the reference triangle's nodes, the vertices
-    (0, 0), (1, 0), (0, 1) and for P2 the midpoints (0.5, 0.5), (0, 0.5), (0.5, 0), it is
-    1, 0.2, 0.2 and 0.2, 0.6, 0.6: the check at the quadrilateral's own nodes finds the fold, and
-    at half the motion (det F = 1 - 0.8 (x + y) + ... > 0 at every node) it finds none."""
+    function x y in reference coordinates): det F = 1 - 0.8 (x + y), -0.6 at that vertex, where the
+    cell folds, but 1, 0.2, 0.2 at the reference triangle's vertices (0, 0), (1, 0), (0, 1) and 0.2,
+    0.6, 0.6 at its P2 midpoints (0.5, 0.5), (0, 0.5), (0.5, 0): the check at the quadrilateral's
+    own nodes finds the fold; at half the motion, det F = 1 - 0.4 (x + y) >= 0.2, it finds none."""
     md = quad_rectangle(1.0, 1.0, 1, 1, degree, cache)
     m = Model(Body(md, "plane_strain", Elastic(E, NU), update="sr", degree=degree), [Fixed("left")])
     m.finalize()
@@ -119,7 +118,7 @@ def test_det_F_is_checked_at_every_node_of_the_quadrilateral(cache, degree):
     np.testing.assert_allclose(np.sort(at_tri), np.sort([1.0, 0.2, 0.2] + ([0.2, 0.6, 0.6] if degree == 2 else [])),
                                rtol=1e-10)
     message = m.folded_at_nodes()
-    assert message is not None and message.startswith(f"det F = {0.2 ** 2 - 0.8 ** 2:.3g} <= 0 at a node")
+    assert message is not None and message.startswith(f"det F = {1.0 - 0.8 * 2:.3g} <= 0 at a node")
     # unfolded: half that motion keeps det F > 0 at every node
     m.u.x.array[:] *= 0.5
     assert m.folded_at_nodes() is None
