@@ -3,13 +3,18 @@
 MPI is imported in the fixtures, not here: with pytest-xdist (``make test`` runs the serial suite on
 workers, one per core) this file is also loaded by the controlling process, which starts the workers; an MPI
 initialised there would leave its singleton's variables (OMPI_*, PMIX_*) in the workers' environment,
-and an ``mpirun`` started by a test (launch.py) would then take itself for part of that job and exit."""
+and an ``mpirun`` started by a test (launch.py) would then take itself for part of that job and exit.
+``comove_dolfinx`` is imported here, which loads nothing heavy: its import hook runs the PyPI wheel's
+MPI bootstrap before the first import of mpi4py or dolfinx, so that a test module that imports
+dolfinx ahead of comove_dolfinx also runs alone."""
 import gc
 import logging
 import os
 
 import numpy as np
 import pytest
+
+import comove_dolfinx  # noqa: F401
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 logging.disable(logging.INFO)          # ffcx/cffi compile chatter

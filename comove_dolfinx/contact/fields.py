@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import basix
 import numpy as np
 import ufl
 from dolfinx import fem
@@ -134,19 +135,21 @@ class BoundaryFields:
 def p1_interpolation(S, S1, degree: int):
     """(dofs of S, the two P1 dofs whose mean is their value) for the interpolation of a P1
     field into the boundary fields' space S (P1 or P2: a vertex takes its value, an edge's
-    midpoint the mean of the edge's ends; triangles and tetrahedra), in numpy: dolfinx's
-    interpolation between two spaces cost as much as the rest of the output. None for other
-    degrees and for hexahedra (dolfinx interpolates there)."""
-    if degree not in (1, 2) or compat.cell_name(S.mesh) == "hexahedron":
+    midpoint the mean of the edge's ends; triangles, quadrilaterals and tetrahedra, whose boundary
+    nodes are all vertices or edge midpoints), in numpy: dolfinx's interpolation between two spaces
+    cost as much as the rest of the output. None for other degrees and for hexahedra (dolfinx
+    interpolates there: a Q2 face's centre is the mean of four vertices)."""
+    cell = compat.cell_name(S.mesh)
+    if degree not in (1, 2) or cell == "hexahedron":
         return None
-    tdim = S.mesh.topology.dim
-    imap = S.mesh.topology.index_map(tdim)
+    imap = S.mesh.topology.index_map(S.mesh.topology.dim)
     n = imap.size_local + imap.num_ghosts
     cs, c1 = compat.cell_dofs(S, n), compat.cell_dofs(S1, n)
-    # the P2 cell's dofs: the vertices, then the edges in the reference cell's order (triangle: the
-    # edges opposite vertices 0, 1 and 2)
-    edges = [(2, 3), (1, 3), (1, 2), (0, 3), (0, 2), (0, 1)] if tdim == 3 else [(1, 2), (0, 2), (0, 1)]
-    ends = [(k, k) for k in range(tdim + 1)] + (edges if degree == 2 else [])
+    # the cell's dofs: its vertices, then (P2) its edges, each in the reference cell's order
+    # (basix's, e.g. the triangle's edges opposite vertices 0, 1 and 2, the quadrilateral's 0-1,
+    # 0-2, 1-3, 2-3); a quadrilateral's P2 centre is no boundary node and is left out
+    vertices, edges = basix.topology(getattr(basix.CellType, cell))[:2]
+    ends = [(v[0], v[0]) for v in vertices] + ([tuple(e) for e in edges] if degree == 2 else [])
     dofs = np.concatenate([cs[:, k] for k in range(len(ends))])
     a = np.concatenate([c1[:, i] for i, _ in ends])
     b = np.concatenate([c1[:, j] for _, j in ends])

@@ -1,8 +1,9 @@
 """One ParaView dataset per converged increment: ``results.pvd`` and ``results_NNNNN.vtu``.
 
 Every ``.vtu`` holds the whole body on the displacement's mesh, at its reference position (quadratic
-triangles or tetrahedra for P2, 27-node hexahedra for Q2, so every node of the solution is there) with all the fields of that
-increment, so that ParaView's open -> Warp By Vector -> colour by any field works on each time step:
+triangles or tetrahedra for P2, 9-node quadrilaterals and 27-node hexahedra for Q2, so every node
+of the solution is there) with all the fields of that increment, so that ParaView's open -> Warp By
+Vector -> colour by any field works on each time step:
 
 * point data: ``displacement`` (3 components; z = 0 for 2D bodies, for Warp By Vector) and, for
   every contact item, ``contact_pressure`` (and ``contact_shear`` with friction): the pressure that
@@ -38,12 +39,15 @@ from .xdmf import FibreStress, stress_tensors, von_mises
 # dolfinx's P2 triangle: vertices 0, 1, 2, then the edges opposite them (1-2, 0-2, 0-1); VTK's
 # quadratic triangle: vertices, then the edges 0-1, 1-2, 2-0. dolfinx's (basix's) P2 tetrahedron:
 # vertices 0-3, then the edges 2-3, 1-3, 1-2, 0-3, 0-2, 0-1; VTK's quadratic tetrahedron: vertices,
-# then the edges 0-1, 1-2, 0-2, 0-3, 1-3, 2-3. dolfinx's hexahedron: vertices in tensor order (x
-# fastest), for Q2 then the edges, the faces and the centre (basix's numbering); VTK's (tri)quadratic
-# hexahedron (type 29, ParaView draws it curved): vertices counter-clockwise at z = 0, then z = 1,
-# the edges 0-1, 1-2, 2-3, 3-0 (z = 0), the same at z = 1, the edges along z, the faces x = 0,
-# x = 1, y = 0, y = 1, z = 0, z = 1, the centre.
+# then the edges 0-1, 1-2, 0-2, 0-3, 1-3, 2-3. dolfinx's quadrilateral: vertices in tensor order
+# (x fastest), for Q2 then the edges 0-1, 0-2, 1-3, 2-3 and the centre; VTK's (bi)quadratic quad
+# (type 28): vertices counter-clockwise, the edges 0-1, 1-2, 2-3, 3-0, the centre. dolfinx's
+# hexahedron: vertices in tensor order (x fastest), for Q2 then the edges, the faces and the centre
+# (basix's numbering); VTK's (tri)quadratic hexahedron (type 29, ParaView draws it curved):
+# vertices counter-clockwise at z = 0, then z = 1, the edges 0-1, 1-2, 2-3, 3-0 (z = 0), the same
+# at z = 1, the edges along z, the faces x = 0, x = 1, y = 0, y = 1, z = 0, z = 1, the centre.
 _VTK_CELLS = {(2, 3): ("triangle", None), (2, 6): ("triangle6", [0, 1, 2, 5, 3, 4]),
+              (2, 4): ("quad", [0, 1, 3, 2]), (2, 9): ("quad9", [0, 1, 3, 2, 4, 6, 7, 5, 8]),
               (3, 4): ("tetra", None), (3, 10): ("tetra10", [0, 1, 2, 3, 9, 6, 8, 7, 5, 4]),
               (3, 8): ("hexahedron", [0, 1, 3, 2, 4, 5, 7, 6]),
               (3, 27): ("hexahedron27", [0, 1, 3, 2, 4, 5, 7, 6, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 15, 14,

@@ -17,7 +17,8 @@ from html import escape
 import numpy as np
 
 #: meshio's name of a cell type -> VTK's number for it
-VTK_TYPES = {"triangle": 5, "triangle6": 22, "tetra": 10, "tetra10": 24, "hexahedron": 12, "hexahedron27": 29}
+VTK_TYPES = {"triangle": 5, "triangle6": 22, "quad": 9, "quad9": 28, "tetra": 10, "tetra10": 24, "hexahedron": 12,
+             "hexahedron27": 29}
 
 _TYPES = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("u1"): "UInt8"}
 

@@ -44,8 +44,9 @@ class Body:
     quadrature_degree : int, optional
         Of the volume integrals, 1 to 30; by default 2 (3 points, exact P2 small-strain stiffness),
         3 in axisymmetry (the weight r), 1 for P1 (in 3D: 2 for P2, the 4-point rule, 1 for P1; on
-        hexahedra the full Gauss rules, 4 (3 x 3 x 3 points) for Q2 and 2 (2 x 2 x 2) for Q1: fewer
-        points leave the bricks modes without stiffness).
+        quadrilaterals and hexahedra the full Gauss rules, 4 (3 x 3 (x 3) points) for Q2 and 2
+        (2 x 2 (x 2)) for Q1, one more in axisymmetry: fewer points leave the cells modes without
+        stiffness).
 
     Every value is checked here: one that cannot be used raises :class:`BodyError` (or
     ``MaterialError``) naming it and the fix.
@@ -98,7 +99,7 @@ class Body:
     def rule_degree(self) -> int:
         if self.quadrature_degree is not None:
             return self.quadrature_degree
-        if compat.cell_name(self.mesh.mesh) == "hexahedron":
-            return 2 * self.degree
+        if compat.cell_name(self.mesh.mesh) in ("quadrilateral", "hexahedron"):
+            return 2 * self.degree + (1 if self.kind == "axisymmetric" else 0)
         q = 2 * (self.degree - 1) + (1 if self.kind == "axisymmetric" else 0)
         return max(q, 1 if self.degree == 1 else 2)

@@ -17,12 +17,18 @@ from ..parallel import agree
 from .state import InvertedElement, ReturnMapFailure
 
 
-def _solid_nodes(cell: str, degree: int) -> np.ndarray:
-    """The reference tetrahedron's vertices and, for degree 2, its edge midpoints; the reference
-    hexahedron's nodes (its 8 vertices, or the 27 points of the 3 x 3 x 3 grid for degree 2)."""
-    if cell == "hexahedron":
+def _cell_nodes(cell: str, degree: int) -> np.ndarray:
+    """The nodes of the reference cell: a simplex's vertices and, for degree 2, its edge midpoints;
+    a quadrilateral's or hexahedron's tensor grid (its vertices, or the 3 x 3 (x 3) points of
+    degree 2, edge midpoints, face centres and centre included)."""
+    if cell in ("quadrilateral", "hexahedron"):
         t = np.linspace(0.0, 1.0, degree + 1)
+        if cell == "quadrilateral":
+            return np.array([[x, y] for y in t for x in t])
         return np.array([[x, y, z] for z in t for y in t for x in t])
+    if cell == "triangle":
+        return np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
+                        ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if degree == 2 else []))
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     if degree != 2:
         return v
@@ -69,16 +75,13 @@ class StressEvaluation:
 
     @staticmethod
     def _nodal_det_expression(m):
-        """det F at the cells' nodes (vertices and, for P2, edge midpoints), or None under linear
-        kinematics."""
+        """det F at the cells' nodes (vertices and, for P2, edge midpoints; on quadrilaterals and
+        hexahedra every node of the tensor grid), or None under linear kinematics."""
         if not m.update.geometric:
             return None
-        if m.kin.solid:
-            nodes = _solid_nodes(compat.cell_name(m.mesh), m.degree)
-            return compat.expression(ufl.det(ufl.Identity(3) + ufl.grad(m.u)), nodes)
-        pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]] +
-                       ([[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] if m.degree == 2 else []))
-        return compat.expression(ufl.det(ufl.Identity(2) + ufl.grad(m.u)), pts)
+        dim = 3 if m.kin.solid else 2
+        nodes = _cell_nodes(compat.cell_name(m.mesh), m.degree)
+        return compat.expression(ufl.det(ufl.Identity(dim) + ufl.grad(m.u)), nodes)
 
     def converged_state_changed(self) -> None:
         """The converged state moved (a commit, a checkpoint loaded): the next evaluation is due
