@@ -201,6 +201,28 @@ def _cells_graded_3d(volume: float, p: dict) -> float:
     return cells + (volume - done) / tet
 
 
+def _cells_plate_quarter(p: dict) -> float:
+    """Unstructured tetrahedra in the quarter plate, refined near the disc z = 0, r <= contact_radius
+    and near the rim support: the volume over that of a tetrahedron of the local size, summed on a
+    grid of rings (midpoint rule in r and z). In this thin plate Gmsh's tetrahedra have on average
+    1.3 times the volume of the regular one (measured on the builder's meshes of size t / 4, uniform
+    and refined: the estimate within 5 %; it falls short on coarser meshes, 1025 against 1507 at
+    size t / 2, where the count is far from any limit)."""
+    R, t, size = p["R"], p["t"], p["size"]
+    tet = 1.3 * size ** 3 / (6.0 * math.sqrt(2.0))
+    fine, rc, rim = p.get("size_contact", size), p.get("contact_radius", 0.0), p.get("size_rim", size)
+    growth, zs, n = p.get("growth", 0.25), p["z_support"], 64
+    cells = 0.0
+    for i in range(n):
+        r = (i + 0.5) * R / n
+        for k in range(n):
+            z = (k + 0.5) * t / n
+            h = min(size, fine + growth * math.hypot(max(r - rc, 0.0), z),
+                    rim + growth * math.hypot(R - r, max(z - zs, 0.0)))
+            cells += math.pi / 2.0 * r * (R / n) * (t / n) / (tet * (h / size) ** 3)
+    return cells
+
+
 #: builder -> its cell count from its parameters (the builders' own formulas, geometry/builders.py)
 CELLS = {
     "rectangle": lambda p: _structured(math.ceil(p["L"] / p["size"]), max(math.ceil(p["H"] / p["size"]), 2)),
@@ -218,6 +240,7 @@ CELLS = {
     "tube_sector": lambda p: _cells_graded_3d(
         0.5 * p.get("angle", math.pi / 2) * (p["r_out"] ** 2 - p["r_in"] ** 2) * p["length"], p),
     "sphere_octant": lambda p: _cells_graded_3d(math.pi * p["R"] ** 3 / 6.0, p),
+    "plate_quarter": _cells_plate_quarter,
 }
 
 
