@@ -71,7 +71,8 @@ def test_plate_quarter_faces(cache):
     size_rim and size_contact the cells there are that small, those away are not."""
     from dolfinx import mesh as dmesh
     R, t, zs = 3.0, 1.0, 0.25
-    md = geometry.plate_quarter(R, t, zs, 0.4, size_rim=0.1, size_contact=0.1, contact_radius=1.0, cache_dir=cache)
+    md = geometry.plate_quarter(R, t, zs, 0.4, size_rim=0.1, size_contact=0.1, contact_radius=1.0,
+                                cache_dir=cache)
     assert md.tags == {"top": 1, "bottom": 2, "rim_support": 3, "rim": 4, "xsym": 5, "ysym": 6}
     for name, axis, value in (("top", 2, t), ("bottom", 2, 0.0), ("xsym", 0, 0.0), ("ysym", 1, 0.0)):
         assert np.allclose(_face_nodes(md, name)[:, axis], value, atol=1e-9), name
