@@ -170,6 +170,15 @@ def test_cache_reuses_the_file(cache):
     (lambda c: geometry.tube_sector(10.0, 15.0, 100.0, 1.0, size_contact=1e-4, contact_zone=1.0, cache_dir=c),
      r"^tube_sector: size = 1\.0, size_contact = 0\.0001 would make about .* cells, more than the 5000000 .*: "
      r"give size_contact >= [0-9.]+$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 2.0, 0.5, cache_dir=c),
+     r"^z_support must lie strictly between 0 and t = 2\.0, got 2\.0$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 0.25, 0.5, size_rim=0.6, cache_dir=c),
+     r"^size_rim must not exceed size = 0\.5, got 0\.6$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 0.25, 0.5, size_contact=0.2, cache_dir=c),
+     r"^size_contact needs contact_radius, the radius of the refined disc on the bottom face$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 0.25, 0.5, size_rim=1e-4, cache_dir=c),
+     r"^plate_quarter: size = 0\.5, size_rim = 0\.0001 would make about .* cells, more than the 5000000 .*: "
+     r"give size_rim >= [0-9.]+$"),
 ])
 def test_bad_input_is_refused_before_gmsh(tmp_path, call, message):
     with pytest.raises(MeshError, match=message):

@@ -246,10 +246,10 @@ def _plate_groups(volumes: list, R: float, t: float, z_support: float) -> None:
     on_plane = {"top": lambda m: abs(m[2] - t) < tol, "bottom": lambda m: abs(m[2]) < tol,
                 "xsym": lambda m: abs(m[0]) < tol, "ysym": lambda m: abs(m[1]) < tol}
     groups = {name: _faces_where(faces, test) for name, test in on_plane.items()}
-    flat = {t for tags in groups.values() for t in tags}
-    curved = [tag for dim, tag in faces if tag not in flat]
-    groups["rim_support"] = _faces_where([(2, c) for c in curved], lambda m: m[2] < z_support)
-    groups["rim"] = [c for c in curved if c not in groups["rim_support"]]
+    flat = {tag for tags in groups.values() for tag in tags}
+    curved = [(dim, tag) for dim, tag in faces if tag not in flat]
+    groups["rim_support"] = _faces_where(curved, lambda m: m[2] < z_support)
+    groups["rim"] = [tag for dim, tag in curved if tag not in groups["rim_support"]]
     add_group(3, volumes, BODY_TAG, "body")
     for tag, name in enumerate(("top", "bottom", "rim_support", "rim", "xsym", "ysym"), start=1):
         add_group(2, groups[name], tag, name)
@@ -289,8 +289,10 @@ def _plate_refinement(size: float, size_contact, contact_radius, size_rim, growt
     if refine:
         refine["contact_radius"] = refine.pop("contact_zone")
     if size_rim is not None:
-        rim = _check_refinement(size, size_rim, 1.0, growth)
-        refine.update(size_rim=rim["size_contact"], growth=rim["growth"])
+        _positive(size_rim=size_rim, growth=growth)
+        if size_rim > size:
+            raise MeshError(f"size_rim must not exceed size = {size}, got {size_rim!r}")
+        refine.update(size_rim=float(size_rim), growth=float(growth))
     return refine
 
 
