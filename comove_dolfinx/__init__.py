@@ -48,7 +48,8 @@ if not {"mpi4py", "petsc4py", "dolfinx"} & set(sys.modules):
 
 _API = {
     "geometry": ("MeshData", "MeshError", "rectangle", "annulus_sector", "plate_section", "quarter_disc",
-                 "necking_bar", "necking_bar_grid", "box", "tube_sector", "sphere_octant", "load_msh", "from_dolfinx"),
+                 "necking_bar", "necking_bar_grid", "box", "tube_sector", "sphere_octant", "plate_quarter",
+                 "load_msh", "from_dolfinx"),
     "mechanics.body": ("Body", "BodyError"),
     "mechanics.materials": ("Elastic", "J2", "Chen", "Hardening", "MaterialError"),
     "loads": ("Fixed", "Displacement", "Pressure", "Traction", "BodyForce", "PointLoad", "ItemError"),

@@ -207,6 +207,39 @@ def _bricks_of_tube(p: dict) -> float:
             * math.ceil((p["r_out"] - p["r_in"]) / p["size"]) * math.ceil(p["length"] / p["size"]))
 
 
+def _cells_graded_band(dv0: float, dv1: float, fine: float, size: float, growth: float, tet: float) -> float:
+    """The tetrahedra added to a uniform mesh of size ``size`` by the band about a refined set where
+    the size grows from ``fine`` by ``growth`` per unit distance rho: the volume at distance rho is
+    (dv0 + dv1 rho) d rho; integrated over the size h (geometric steps: the finest scales count)."""
+    n, cells = 400, 0.0
+    hs = [fine * (size / fine) ** (k / n) for k in range(n + 1)]
+    for a, b in zip(hs[:-1], hs[1:]):
+        h = 0.5 * (a + b)
+        dv = (dv0 + dv1 * (h - fine) / growth) * (b - a) / growth
+        cells += dv / (tet * (h / size) ** 3) - dv / tet
+    return cells
+
+
+def _cells_plate_quarter(p: dict) -> float:
+    """Unstructured tetrahedra in the quarter plate: its volume over that of a tetrahedron of size
+    ``size``, plus the graded bands about the refined disc (z = 0, r <= contact_radius) and rim
+    support (r = R, z <= z_support). In this thin plate Gmsh's tetrahedra have on average 1.3 times
+    the volume of the regular one (measured on the builder's meshes of size t / 4, uniform and
+    refined: the estimate within 5 %; it falls short on coarser meshes, 1025 against 1507 at size
+    t / 2, where the count is far from any limit)."""
+    R, t, size, growth = p["R"], p["t"], p["size"], p.get("growth", 0.25)
+    tet = 1.3 * size ** 3 / (6.0 * math.sqrt(2.0))
+    cells = math.pi * R * R * t / 4.0 / tet
+    if "size_contact" in p:             # the quarter disc, and a quarter tube about its rim
+        rc = p["contact_radius"]
+        cells += _cells_graded_band(math.pi * rc * rc / 4.0, math.pi * math.pi * rc / 4.0, p["size_contact"],
+                                    size, growth, tet)
+    if "size_rim" in p:                 # the strip, and a quarter tube about its upper edge
+        arc = math.pi * R / 2.0
+        cells += _cells_graded_band(arc * p["z_support"], arc * math.pi / 2.0, p["size_rim"], size, growth, tet)
+    return cells
+
+
 #: builder -> its cell count from its parameters (the builders' own formulas, geometry/builders.py)
 CELLS = {
     "rectangle": lambda p: _structured(math.ceil(p["L"] / p["size"]), max(math.ceil(p["H"] / p["size"]), 2)),
@@ -224,6 +257,7 @@ CELLS = {
     "tube_sector": lambda p: _bricks_of_tube(p) if p.get("hexahedra") else _cells_graded_3d(
         0.5 * p.get("angle", math.pi / 2) * (p["r_out"] ** 2 - p["r_in"] ** 2) * p["length"], p),
     "sphere_octant": lambda p: _cells_graded_3d(math.pi * p["R"] ** 3 / 6.0, p),
+    "plate_quarter": _cells_plate_quarter,
 }
 
 
@@ -243,7 +277,7 @@ def mesh_size_error(builder: str, params: dict, limit: int = MAX_CELLS) -> str |
     cells = mesh_cells(builder, params)
     if cells <= limit:
         return None
-    sizes = [k for k in ("size", "size_contact") if k in params]
+    sizes = [k for k in ("size", "size_contact", "size_rim") if k in params]
     if not sizes:                                   # necking_bar: cells by count
         return (f"n_r = {params.get('n_r')}, n_z = {params.get('n_z')} give {cells:.3g} cells, more than "
                 f"{limit}: give fewer")

@@ -66,6 +66,27 @@ def test_tube_sector_faces(cache, angle):
     assert (np.arctan2(nodes[:, 1], nodes[:, 0]) >= theta0 - 1e-9).all()
 
 
+def test_plate_quarter_faces(cache):
+    """The quarter plate's faces on their planes and cylinder, the rim split at z_support; with
+    size_rim and size_contact the cells there are that small, those away are not."""
+    from dolfinx import mesh as dmesh
+    R, t, zs = 3.0, 1.0, 0.25
+    md = geometry.plate_quarter(R, t, zs, 0.4, size_rim=0.1, size_contact=0.1, contact_radius=1.0,
+                                cache_dir=cache)
+    assert md.tags == {"top": 1, "bottom": 2, "rim_support": 3, "rim": 4, "xsym": 5, "ysym": 6}
+    for name, axis, value in (("top", 2, t), ("bottom", 2, 0.0), ("xsym", 0, 0.0), ("ysym", 1, 0.0)):
+        assert np.allclose(_face_nodes(md, name)[:, axis], value, atol=1e-9), name
+    low, up = _face_nodes(md, "rim_support"), _face_nodes(md, "rim")
+    assert np.allclose(np.hypot(low[:, 0], low[:, 1]), R, atol=1e-9) and np.allclose(np.hypot(up[:, 0], up[:, 1]), R)
+    assert low[:, 2].max() < zs + 1e-9 and up[:, 2].min() > zs - 1e-9
+    assert _volume(md) == pytest.approx(math.pi * R * R * t / 4, rel=1e-6)
+    cells = np.arange(md.mesh.topology.index_map(3).size_local, dtype=np.int32)
+    h, x = compat.cell_sizes(md.mesh, cells), dmesh.compute_midpoints(md.mesh, 3, cells)
+    r = np.hypot(x[:, 0], x[:, 1])
+    assert np.median(h[(r < 0.9) & (x[:, 2] < 0.1)]) < 2 * 0.1 and np.median(h[(R - r < 0.1) & (x[:, 2] < zs)]) < 2 * 0.1
+    assert np.median(h[(r > 1.5) & (r < 2.0) & (x[:, 2] > 0.6)]) > 0.3
+
+
 def test_sphere_octant_faces(cache):
     R = 2.0
     md = geometry.sphere_octant(R, 0.5, cache_dir=cache)
@@ -149,6 +170,15 @@ def test_cache_reuses_the_file(cache):
     (lambda c: geometry.tube_sector(10.0, 15.0, 100.0, 1.0, size_contact=1e-4, contact_zone=1.0, cache_dir=c),
      r"^tube_sector: size = 1\.0, size_contact = 0\.0001 would make about .* cells, more than the 5000000 .*: "
      r"give size_contact >= [0-9.]+$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 2.0, 0.5, cache_dir=c),
+     r"^z_support must lie strictly between 0 and t = 2\.0, got 2\.0$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 0.25, 0.5, size_rim=0.6, cache_dir=c),
+     r"^size_rim must not exceed size = 0\.5, got 0\.6$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 0.25, 0.5, size_contact=0.2, cache_dir=c),
+     r"^size_contact needs contact_radius, the radius of the refined disc on the bottom face$"),
+    (lambda c: geometry.plate_quarter(10.0, 2.0, 0.25, 0.5, size_rim=1e-4, cache_dir=c),
+     r"^plate_quarter: size = 0\.5, size_rim = 0\.0001 would make about .* cells, more than the 5000000 .*: "
+     r"give size_rim >= [0-9.]+$"),
 ])
 def test_bad_input_is_refused_before_gmsh(tmp_path, call, message):
     with pytest.raises(MeshError, match=message):
@@ -241,7 +271,10 @@ def test_cell_estimates_are_the_builders_counts(cache):
     from comove_dolfinx.checks import mesh_cells
     cases = [("tube_sector", dict(r_in=1.0, r_out=1.5, length=2.0, size=0.1)),
              ("sphere_octant", dict(R=1.0, size=0.08)),
-             ("sphere_octant", dict(R=50.0, size=8.0, size_contact=0.8, contact_zone=12.0, growth=0.25))]
+             ("sphere_octant", dict(R=50.0, size=8.0, size_contact=0.8, contact_zone=12.0, growth=0.25)),
+             ("plate_quarter", dict(R=10.0, t=2.0, z_support=0.25, size=0.5)),
+             ("plate_quarter", dict(R=10.0, t=2.0, z_support=0.25, size=0.5, size_rim=0.125, size_contact=0.25,
+                                    contact_radius=4.5))]
     for name, params in cases:
         md = getattr(geometry, name)(**params, cache_dir=cache)
         n = md.mesh.topology.index_map(3).size_global

@@ -2,7 +2,7 @@
 
 Every builder makes a triangle mesh in the (x, y) plane (gdim = 2; for the axisymmetric plate x is the
 radius r and y the axial coordinate z) with straight-sided (order 1) or curved (order 2, mid-side nodes on
-the true arcs) triangles; :func:`box`, :func:`tube_sector` and :func:`sphere_octant` make tetrahedra
+the true arcs) triangles; :func:`box`, :func:`tube_sector`, :func:`sphere_octant` and :func:`plate_quarter` make tetrahedra
 in 3D (gdim = 3, named faces instead of curves, for the model "solid"; order 2 puts the mid-edge nodes
 on the true cylinders and sphere), :func:`box` and :func:`tube_sector` with ``hexahedra=True``
 structured hexahedra (Gmsh's 8-node bricks, or its 27-node ones at order 2). Lengths are in the user's units (the scenes use cm).
@@ -24,7 +24,7 @@ demos/demo_seal.py does), ``gmsh_session.start()``/``stop()`` keep Python's Ctrl
 gmsh's own calls replace by the system's default (the process then dies at Ctrl-C without a word).
 """
 from .builders import annulus_sector, necking_bar, necking_bar_grid, plate_section, quarter_disc, rectangle
-from .builders3d import box, sphere_octant, tube_sector
+from .builders3d import box, plate_quarter, sphere_octant, tube_sector
 from .meshes import (
            BODY_TAG,
            MeshData,
@@ -35,5 +35,5 @@ from .meshes import (
 )
 
 __all__ = ["BODY_TAG", "MeshData", "MeshError", "annulus_sector", "box", "fix_coordinate_element", "from_dolfinx",
-           "load_msh", "necking_bar", "necking_bar_grid", "plate_section", "quarter_disc", "rectangle",
+           "load_msh", "necking_bar", "necking_bar_grid", "plate_quarter", "plate_section", "quarter_disc", "rectangle",
            "sphere_octant", "tube_sector"]

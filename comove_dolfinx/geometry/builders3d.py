@@ -288,3 +288,111 @@ def sphere_octant(R: float, size: float, order: int = 2, size_contact: float | N
         _sizes_near((0.0, 0.0, R), size, refine)
 
     return build_cached("sphere_octant", params, construct, comm, cache_dir, dim=3)
+
+
+def _plate_groups(volumes: list, R: float, t: float, z_support: float) -> None:
+    """Physical groups of the quarter plate (its OCC ``volumes``, synchronized)."""
+    faces, tol = gmsh.model.getBoundary([(3, v) for v in volumes], combined=True, oriented=False), 1e-7 * R
+    on_plane = {"top": lambda m: abs(m[2] - t) < tol, "bottom": lambda m: abs(m[2]) < tol,
+                "xsym": lambda m: abs(m[0]) < tol, "ysym": lambda m: abs(m[1]) < tol}
+    groups = {name: _faces_where(faces, test) for name, test in on_plane.items()}
+    flat = {tag for tags in groups.values() for tag in tags}
+    curved = [(dim, tag) for dim, tag in faces if tag not in flat]
+    groups["rim_support"] = _faces_where(curved, lambda m: m[2] < z_support)
+    groups["rim"] = [tag for dim, tag in curved if tag not in groups["rim_support"]]
+    add_group(3, volumes, BODY_TAG, "body")
+    for tag, name in enumerate(("top", "bottom", "rim_support", "rim", "xsym", "ysym"), start=1):
+        add_group(2, groups[name], tag, name)
+
+
+def _sizes_near_plate(R: float, z_support: float, size: float, refine: dict) -> None:
+    """Element size ``size``, or (with ``refine``) ``size_contact`` on the disc z = 0, r <=
+    ``contact_radius`` and ``size_rim`` on the rim support (r = R, z <= z_support), each growing by
+    ``growth`` per unit distance from there up to ``size``."""
+    _sizes_near((0.0, 0.0, 0.0), size, {})
+    if not refine:
+        return
+    terms = [repr(size)]
+    r = "Sqrt(x^2 + y^2)"
+    if "size_contact" in refine:
+        disc = f"Sqrt(Max({r} - {refine['contact_radius']!r}, 0)^2 + z^2)"
+        terms.append(f"{refine['size_contact']!r} + {refine['growth']!r} * {disc}")
+    if "size_rim" in refine:
+        rim = f"Sqrt(({R!r} - {r})^2 + Max(z - {z_support!r}, 0)^2)"
+        terms.append(f"{refine['size_rim']!r} + {refine['growth']!r} * {rim}")
+    fields = gmsh.model.mesh.field
+    field = fields.add("MathEval")
+    expression = terms[0]
+    for term in terms[1:]:
+        expression = f"Min({expression}, {term})"
+    fields.setString(field, "F", expression)
+    fields.setAsBackgroundMesh(field)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", min(refine.get(k, size) for k in ("size_contact", "size_rim")))
+
+
+def _plate_refinement(size: float, size_contact, contact_radius, size_rim, growth: float) -> dict:
+    """The refinement parameters of plate_quarter to hash (empty without refinement); MeshError if
+    unusable."""
+    if size_contact is not None and contact_radius is None:
+        raise MeshError("size_contact needs contact_radius, the radius of the refined disc on the bottom face")
+    refine = _check_refinement(size, size_contact, contact_radius, growth)
+    if refine:
+        refine["contact_radius"] = refine.pop("contact_zone")
+    if size_rim is not None:
+        _positive(size_rim=size_rim, growth=growth)
+        if size_rim > size:
+            raise MeshError(f"size_rim must not exceed size = {size}, got {size_rim!r}")
+        refine.update(size_rim=float(size_rim), growth=float(growth))
+    return refine
+
+
+def plate_quarter(R: float = 10.0, t: float = 2.0, z_support: float = 0.25, size: float = 0.5,
+                  order: int = 2, size_contact: float | None = None, contact_radius: float | None = None,
+                  size_rim: float | None = None, growth: float = 0.25, comm: MPI.Comm = MPI.COMM_WORLD,
+                  cache_dir: str | os.PathLike = "meshes") -> MeshData:
+    """The quarter x, y >= 0 of the thick circular plate r <= R, 0 <= z <= t (the 3D body of the
+    axisymmetric ``plate_section``); unstructured tetrahedra, the rim split at z = z_support.
+
+    Parameters
+    ----------
+    R, t
+        Plate radius and thickness.
+    z_support
+        Height (0 < z_support < t) at which the rim r = R is split: the lower part carries the
+        rim support.
+    size
+        Element size (gmsh's target edge length).
+    order
+        Geometry order, 1 or 2 (mid-side nodes on the true cylinder).
+    size_contact, contact_radius, size_rim, growth
+        With ``size_contact`` (<= size): elements of that size on the bottom face within
+        ``contact_radius`` of the axis (where the plate meets a base below it); with ``size_rim``
+        (<= size): elements of that size on the rim support; each growing by ``growth`` per unit
+        distance from there up to ``size``.
+    comm, cache_dir
+        As for ``rectangle``.
+
+    Returns
+    -------
+    MeshData
+        Facet tags top (z = t) = 1, bottom (z = 0) = 2, rim_support (r = R, z <= z_support) = 3,
+        rim (r = R, z >= z_support) = 4, xsym (x = 0) = 5, ysym (y = 0) = 6; cells "body" = BODY_TAG.
+    """
+    _positive(R=R, t=t, z_support=z_support, size=size)
+    order = _check_order(order)
+    if not z_support < t:
+        raise MeshError(f"z_support must lie strictly between 0 and t = {t}, got {z_support!r}")
+    refine = _plate_refinement(size, size_contact, contact_radius, size_rim, growth)
+    params = dict(R=float(R), t=float(t), z_support=float(z_support), size=float(size), order=order, **refine)
+    _not_too_fine("plate_quarter", params)
+
+    def construct() -> None:
+        occ = gmsh.model.occ
+        low = occ.addCylinder(0, 0, 0, 0, 0, z_support, R, angle=math.pi / 2)
+        up = occ.addCylinder(0, 0, z_support, 0, 0, t - z_support, R, angle=math.pi / 2)
+        pieces = occ.fragment([(3, low)], [(3, up)])[0]
+        occ.synchronize()
+        _plate_groups([tag for dim, tag in pieces if dim == 3], R, t, z_support)
+        _sizes_near_plate(R, z_support, size, refine)
+
+    return build_cached("plate_quarter", params, construct, comm, cache_dir, dim=3)

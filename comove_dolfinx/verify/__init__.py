@@ -25,7 +25,8 @@ import pathlib
 from dataclasses import asdict, dataclass
 
 #: every case by its name on the command line (the name of its module in this package)
-CASES = ("patch", "hertz_line", "hertz_sphere", "indentation", "cattaneo_mindlin", "punch", "slices", "necking")
+CASES = ("patch", "hertz_line", "hertz_sphere", "indentation", "cattaneo_mindlin", "punch", "slices", "plate3d",
+         "necking")
 
 
 def available(name: str) -> bool:
