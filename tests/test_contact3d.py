@@ -20,12 +20,9 @@ from mpi4py import MPI
 
 import comove_dolfinx as cm
 from comove_dolfinx.contact import Contact, ContactError, Cylinder, Plane, Sphere, hertz3d
-from comove_dolfinx.loads import Displacement, Pressure, Traction
-from comove_dolfinx.mechanics.body import Body
-from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.probes import ProbeError
 from comove_dolfinx.taylor import taylor_test
-from states import one_correction_into
+from states import pressed_block
 
 R, E_S, NU_S, D = hertz3d.R, hertz3d.E, hertz3d.NU, hertz3d.D       # Hertz's sphere
 
@@ -169,14 +166,7 @@ def _state(cache, method="penalty", friction="slip", obstacle="plane", friction_
     """A block (1 x 0.5 x 0.5, P2) with a follower pressure and a dead traction, pressed onto the
     obstacle by its top face, which moves down and sideways in x and y: two converged increments,
     then one Newton correction into the next (as tests/test_taylor.py does in 2D)."""
-    md = cm.box(1.0, 0.5, 0.5, 0.25, cache_dir=cache)
-    c = Contact("bottom", _obstacle(obstacle), method=method, gamma0=10.0, mu=FRICTION[friction],
-                friction=friction_law)
-    items = [Displacement("top", (0.06, 0.03, -0.06)), Pressure("right", 5.0), Traction("left", (2.0, -1.0, 0.5)), c]
-    m = Model(Body(md, "solid", cm.Elastic(1000.0, 0.3)), items)
-    m.finalize()
-    one_correction_into(m)
-    assert c.zone().in_contact
+    m, c = pressed_block(cache, _obstacle(obstacle), method=method, mu=FRICTION[friction], friction=friction_law)
     stick, slip = c.stick_slip()
     if friction == "slip":
         assert slip > 0.2 * (stick + slip), (stick, slip)

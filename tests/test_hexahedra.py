@@ -17,6 +17,7 @@ from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.solver import IncrementalSolver, NewtonSettings, StepSettings
 from comove_dolfinx.taylor import taylor_test
 from states import one_correction_into
+from test_output3d import _bent_block as _bent_block_of
 from test_output3d import _closed_form, _same_history
 
 # a displacement gradient with six distinct strain components and a rotation part
@@ -282,23 +283,9 @@ def test_vtk_of_hexahedra(tmp_path, order):
                                rtol=0, atol=1e-8 * np.abs(sigma).max())
 
 
-def _bent_block(folder, checkpoint=None, stop_after=None, comm=MPI.COMM_WORLD):
-    """A J2 block of Q2 bricks held on its left face, its right face moved down and along x at
-    finite strain (sr_log), in 5 increments: plastic flow, a non-uniform state at every point."""
-    from comove_dolfinx.io.checkpoint import Checkpoint
-    from comove_dolfinx.io.writers import Writer
-    md = geometry.box(1.0, 0.4, 0.4, 0.2, order=2, comm=comm, cache_dir=str(folder), hexahedra=True)
-    body = cm.Body(md, "solid", cm.J2(E, NU, cm.Hardening.linear(5.0, 50.0)), update="sr_log")
-    items = [cm.Fixed("left"), cm.Displacement("right", (0.02, -0.08, 0.03))]
-
-    class Stop(Writer):
-        def write(self, run, row, increment):
-            if stop_after is not None and row["increment"] == stop_after:
-                raise RuntimeError("stopped by the test")
-    writers = ([Checkpoint(checkpoint, every=1, interval=0.0)] if checkpoint is not None else []) + [Stop()]
-    probes = [cm.Reaction("left", "clamp", dim=3), cm.NodeDisplacement("tip", (1.0, 0.4, 0.4)),
-              cm.MaxPlasticStrain()]
-    return cm.Job(body, items, [cm.Step(5)], probes, writers=writers)
+def _bent_block(*args, **kwargs):
+    """test_output3d's plastic block on Q2 bricks."""
+    return _bent_block_of(*args, hexahedra=True, **kwargs)
 
 
 @pytest.mark.mpi

@@ -15,12 +15,9 @@ from mpi4py import MPI
 
 import comove_dolfinx as cm
 from comove_dolfinx import compat
-from comove_dolfinx.contact import Contact, ContactError, Cylinder, Extruded, Plane, Profile, Revolved, Sphere
-from comove_dolfinx.loads import Displacement, Pressure, Traction
-from comove_dolfinx.mechanics.body import Body
-from comove_dolfinx.mechanics.model import Model
+from comove_dolfinx.contact import ContactError, Cylinder, Extruded, Plane, Profile, Revolved, Sphere
 from comove_dolfinx.taylor import taylor_test
-from states import one_correction_into
+from states import pressed_block
 
 D = np.array([0.1, -0.2, 0.3])                   # the obstacles' displacement in the checks
 ORIGIN = np.array([0.2, 0.1, -0.3])
@@ -135,15 +132,8 @@ def _obstacle(kind):
 
 
 def _state(cache, obstacle, method, mu=0.1):
-    """The block with a follower pressure and a dead traction, its top face moving down and
-    sideways: two converged increments, then one Newton correction into the next."""
-    md = cm.box(1.0, 0.5, 0.5, 0.25, cache_dir=cache)
-    c = Contact("bottom", _obstacle(obstacle), method=method, gamma0=10.0, mu=mu)
-    items = [Displacement("top", (0.06, 0.03, -0.06)), Pressure("right", 5.0), Traction("left", (2.0, -1.0, 0.5)), c]
-    m = Model(Body(md, "solid", cm.Elastic(1000.0, 0.3)), items)
-    m.finalize()
-    one_correction_into(m)
-    assert c.zone().in_contact
+    """tests/states.py's pressed block on ``obstacle`` (a name of _obstacle), slipping."""
+    m, c = pressed_block(cache, _obstacle(obstacle), method=method, mu=mu)
     stick, slip = c.stick_slip()
     assert slip > 0.2 * (stick + slip), (stick, slip)
     return m
