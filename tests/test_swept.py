@@ -220,7 +220,7 @@ REFUSED = [
     (lambda: Extruded(Profile([(0, 0)], 0.1), u=(0, 0)), r"the profile's x direction u = \(0, 0\): give 3"),
     (lambda: Extruded(Profile([(0, 0)], 0.1), origin=(0, 0)), r"the Extruded's origin = \(0, 0\): give 3"),
     (lambda: Revolved(Profile([(0, 0)], 0.1), axis=(0, 0, 0)), r"the axis = \(0, 0, 0\) must not be zero"),
-    (lambda: Revolved(Profile([(0.5, 0), (-0.1, 1)], 0.1)), r"point \(-0.1, 1.0\) has x < 0: its x is the "
+    (lambda: Revolved(Profile([(0.5, 0), (-0.1, 1)], 0.1)), r"point \(-0.1, 1\) has x < 0: its x is the "
                                                              "distance from the axis"),
     (lambda: Revolved(Profile([(0.5, 0)], 0.1), motion=(0, 1)), r"motion = \(0, 1\): give 3 finite numbers"),
 ]

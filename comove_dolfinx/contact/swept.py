@@ -121,7 +121,7 @@ class Revolved(_Swept):
         pts = self.profile.points
         if np.any(pts[:, 0] < 0):
             k = int(np.argmax(pts[:, 0] < 0))
-            raise ContactError(f"the revolved profile's point {tuple(pts[k])!r} has x < 0: its x is the "
+            raise ContactError(f"the revolved profile's point ({pts[k][0]:g}, {pts[k][1]:g}) has x < 0: its x is the "
                                "distance from the axis, give points with x >= 0")
         size = float(np.abs(pts).max()) + self.radius
         self._eps2 = (EPS * size) ** 2
