@@ -32,7 +32,7 @@ low), and 0.25 on the bottom face to r = 4.5, where the contact edge moves (8433
 (largest differences): deflection 0.13 %, force 0.52 %, both checked within 1 %; the contact
 radius 2.66 %, which does not reach 1 % on this mesh: its lag falls with the bottom's size (5.7 %
 at 0.5 without refinement, 3.5 % at 0.25 before the rim was refined, 2.66 % here). The radius is
-therefore drawn (the picture's panel of differences) and reported, not checked: the two measures
+therefore drawn (the picture's middle panel) and reported, not checked: the two measures
 differ in kind (a set of points against an extrapolated edge), and a bound set from this mesh's
 lag would check nothing.
 
