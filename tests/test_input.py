@@ -173,6 +173,21 @@ def test_version_is_the_package_metadata(capsys):
     assert newest == version
 
 
+def test_python_dash_m_runs_the_command(tmp_path):
+    """`python -m comove_dolfinx` is the `comove` command under that interpreter: its version line and
+    a refusal with its exit code (2), one line, no traceback."""
+    import subprocess
+    import sys
+    import tomllib
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    run = subprocess.run([sys.executable, "-m", "comove_dolfinx", "--version"], capture_output=True, text=True)
+    assert (run.returncode, run.stdout.strip()) == (0, f"comove {version}")
+    bad = subprocess.run([sys.executable, "-m", "comove_dolfinx", "run", "bridge", "--out",
+                          str(tmp_path / "out")], capture_output=True, text=True)
+    lines = (bad.stdout + bad.stderr).strip().splitlines()
+    assert bad.returncode == 2 and len(lines) == 1 and "unknown scene 'bridge'" in lines[0], lines
+
+
 # A problem file that runs (a strip pulled at its right end, a plate above it), and keys that break it
 PROBLEM = """
 [mesh]
