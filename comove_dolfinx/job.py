@@ -49,6 +49,10 @@ from .steps import JobError, Step
 __all__ = ["Job", "JobError", "Results", "RunState", "Step", "process_clock", "quiet_compilers"]
 
 
+#: the clock of a job's timer (its timing print and ``Results.timing``): wall time; the output
+#: benchmark sets ``time.process_time`` (benchmarks/output_share.py)
+TIMING_CLOCK = time.perf_counter
+
 class Job:
     """A body, its items, the steps, the probes and the writers (see the module docstring).
 
@@ -88,7 +92,7 @@ class Job:
         """:meth:`run` itself: compile, start (or go on from ``restart``), open the writers, run the
         increment loop (loop.py), and finish, also after a failure or an interrupt."""
         t_start, before = time.perf_counter(), process_clock()[0]
-        timer, first = Timer(), startup.claim()
+        timer, first = Timer(TIMING_CLOCK), startup.claim()
         with startup.part("setup and compilation"):
             model = self._compile(timer)
         run, res, resumed = self._start(model, restart)

@@ -145,3 +145,20 @@ def test_solid_study_runs_the_bent_block_with_each_solver(tmp_path):
     assert float(rows["gamg"]["krylov_per_solve"]) > 1.0 and float(rows["mumps"]["krylov_per_solve"]) == 0.0
     assert all(float(r["completed_to"]) == 1.0 for r in rows.values())
     assert float(rows["gamg"]["newton_its"]) <= 1.2 * float(rows["mumps"]["newton_its"])
+
+
+def test_output_study_times_the_writers_inside_the_job(tmp_path, capsys):
+    """The output benchmark runs the elastica as `comove run` does, in a process of its own: the
+    writers' CPU seconds are timed inside the job's (0 < output < job), a scene does nothing after
+    its job, and the run wrote what the output paid for (history, run.json, the VTK series). An
+    unknown case is a one-line usage error before any run."""
+    from comove_dolfinx.benchmarks.output_share import output
+    (row,) = output(tmp_path, repeats=1, names=["scene:elastica"])
+    assert 0.0 < row["output_cpu_s"] < row["job_cpu_s"] and row["after_cpu_s"] == 0.0
+    assert row["share"] == pytest.approx(row["output_cpu_s"] / row["job_cpu_s"])
+    run = tmp_path / "scene_elastica"
+    assert (run / "history.csv").exists() and (run / "run.json").exists() and (run / "results.pvd").exists()
+    assert read_table(tmp_path / "output.csv")[0]["case"] == "scene:elastica"
+    with pytest.raises(SystemExit):
+        benchmarks.main(["output", "--scenes", "bogus"])
+    assert "unknown case(s) bogus" in capsys.readouterr().err.strip().splitlines()[-1]

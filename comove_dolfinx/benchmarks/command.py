@@ -1,11 +1,11 @@
 """The command line of the benchmarks: ``python -m comove_dolfinx.benchmarks STUDY [options]``.
 
-STUDY is one of dolfinx, floor, parts, solvers, scale, slopes, krylov, solid (the modules of this package say what each
-measures). Options: ``--out DIR`` (results/cost), ``--repeats N``, ``--increments N``, ``--sizes``
+STUDY is one of dolfinx, floor, parts, solvers, scale, slopes, krylov, solid, output (the modules of this package say
+what each measures). Options: ``--out DIR`` (results/cost), ``--repeats N``, ``--increments N``, ``--sizes``
 (comma-separated mesh sizes of the ring; solid: of the bent block), ``--solvers`` (comma-separated configurations of
 :data:`~comove_dolfinx.benchmarks.linear_solvers.SOLVERS`; for krylov the names of
-``NewtonSettings.linear_solver``, also for solid), ``--scenes`` (scale; krylov: one scene) and
-``--set key=value`` (repeatable: a parameter of the ring scene for dolfinx, floor and slopes). A bad option or
+``NewtonSettings.linear_solver``, also for solid), ``--scenes`` (scale; krylov: one scene; output: scenes and
+demos by name) and ``--set key=value`` (repeatable: a parameter of the ring scene for dolfinx, floor and slopes). A bad option or
 scene parameter is a one-line usage error before any run.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ import pathlib
 from ..presets import SceneError, get_scene
 
 PROG = "python -m comove_dolfinx.benchmarks"
-STUDIES = ("dolfinx", "floor", "parts", "solvers", "scale", "slopes", "krylov", "solid")
+STUDIES = ("dolfinx", "floor", "parts", "solvers", "scale", "slopes", "krylov", "solid", "output")
 
 
 def _parser(prog: str) -> argparse.ArgumentParser:
@@ -32,7 +32,7 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument("--sizes", default=None, help="comma-separated mesh sizes (dolfinx, floor, solvers, slopes, krylov)")
     p.add_argument("--solvers", default=None, help="comma-separated configurations (solvers, scale)")
     p.add_argument("--scenes", default=None, help="comma-separated scenes (scale: ring,plate; "
-                   "krylov: one scene, plate)")
+                   "krylov: one scene, plate; output: scenes and demos by name)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="overrides",
                    help="a parameter of the ring scene for its runs (dolfinx, floor, slopes), e.g. predictor=linear")
     return p
@@ -44,7 +44,12 @@ def _check(p: argparse.ArgumentParser, a: argparse.Namespace, ranks: int) -> Non
         p.error("--set applies to the dolfinx, floor and slopes studies only")
     if a.study == "krylov" and a.scenes and "," in a.scenes:
         p.error("krylov takes one scene (--scenes plate)")
-    if a.study in ("parts", "dolfinx") and ranks > 1:
+    if a.study == "output" and a.scenes:
+        from .output_share import cases
+        unknown = [n for n in a.scenes.split(",") if not cases([n])]
+        if unknown:
+            p.error(f"output: unknown case(s) {', '.join(unknown)}: choose among {', '.join(cases())}")
+    if a.study in ("parts", "dolfinx", "output") and ranks > 1:
         p.error(f"{a.study} times one rank: run it without mpirun")
     try:
         get_scene("ring", a.overrides)
@@ -78,6 +83,9 @@ def _run(a: argparse.Namespace, out: pathlib.Path) -> None:
     elif a.study == "solid":
         from .solid3d import NAMES, solid
         solid(out, names=tuple(a.solvers.split(",")) if a.solvers else NAMES, **kw)
+    elif a.study == "output":
+        from .output_share import output
+        output(out, repeats=a.repeats or 3, names=a.scenes.split(",") if a.scenes else None)
     elif a.study == "krylov":
         from .multigrid import NAMES, krylov
         names = tuple(a.solvers.split(",")) if a.solvers else NAMES
