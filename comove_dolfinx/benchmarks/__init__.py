@@ -15,7 +15,8 @@ parts of an iteration. Each study writes CSV files and charts into ``--out`` and
 The modules: ``runs`` (a scene's short run, the linear-elastic floor, a factorisation with another
 solver), ``plain_dolfinx`` (the neo-Hookean problem solved by dolfinx alone), ``iteration_dolfinx``
 (dolfinx), ``iteration_floor`` (floor), ``loop_parts`` (parts), ``linear_solvers`` (solvers),
-``ranks`` (scale), ``line_search`` (slopes), ``output_share`` (output), ``charts`` and ``command`` (the command line).
+``ranks`` (scale), ``line_search`` (slopes), ``output_share`` (output), ``charts`` and ``command``
+(the command line).
 
 CPU time is ``time.process_time`` (the process's, not the machine's); every figure is the median of
 ``--repeats`` runs with its spread (max - min) beside it. Other processes on the machine lengthen

@@ -5,8 +5,8 @@ what each measures). Options: ``--out DIR`` (results/cost), ``--repeats N``, ``-
 (comma-separated mesh sizes of the ring; solid: of the bent block), ``--solvers`` (comma-separated configurations of
 :data:`~comove_dolfinx.benchmarks.linear_solvers.SOLVERS`; for krylov the names of
 ``NewtonSettings.linear_solver``, also for solid), ``--scenes`` (scale; krylov: one scene; output: scenes and
-demos by name) and ``--set key=value`` (repeatable: a parameter of the ring scene for dolfinx, floor and slopes). A bad option or
-scene parameter is a one-line usage error before any run.
+demos by name) and ``--set key=value`` (repeatable: a parameter of the ring scene for dolfinx, floor and
+slopes). A bad option or scene parameter is a one-line usage error before any run.
 """
 from __future__ import annotations
 
