@@ -53,13 +53,15 @@ def octant_run(size_contact: float, cache_dir="meshes", n_increments: int = 4) -
     items = [cm.Fixed("xsym", component=0), cm.Fixed("ysym", component=1),
              cm.Displacement("zsym", D, component=2), c]
     probes = [cm.ContactForce(c, "P", component=2, scale=-4.0), cm.ContactArea(c, "A", scale=4.0),
-              cm.ContactPeak(c, "p0")]
+              cm.ContactPeak(c, "p0"), cm.ContactRadius(c, "a_x", direction=(1.0, 0.0, 0.0)),
+              cm.ContactRadius(c, "a_y", direction=(0.0, 1.0, 0.0))]
     res = cm.Job(body, items, [cm.Step(n_increments)], probes).run()
     if not res.completed:
         raise RuntimeError(res.message)
     P, A, p0 = res.last["P"], res.last["A"], res.last["p0"]
     cpu = comm.allreduce(time.process_time() - t0, op=MPI.SUM) / comm.size
-    return dict(h=size_contact, dofs=res.dofs, P=P, a=float(np.sqrt(A / np.pi)), p0=p0,
+    return dict(h=size_contact, dofs=res.dofs, P=P, a=float(np.sqrt(A / np.pi)), a_x=res.last["a_x"],
+                a_y=res.last["a_y"], p0=p0,
                 newton_its=int(sum(res.newton_its)), cpu_s=cpu, wall_s=time.perf_counter() - w0)
 
 
