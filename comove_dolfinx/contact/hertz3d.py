@@ -12,7 +12,9 @@ a = sqrt(R d) = 10, P = (4/3) E* sqrt(R) d^1.5 = 586081, p0 = 3 P / (2 pi a^2) =
 computed force P, a = (3 P R / (4 E*))^(1/3), p0 = 3 P / (2 pi a^2). The finite sphere pressed by
 its equator is stiffer than the half-space (docs/verification.md, hertz_sphere), so a and p0 are
 compared with Hertz at the computed force, P with the closed form for scale. Measured: P
-(ContactForce), a = sqrt(A / pi) from the whole patch's area A (ContactArea), p0 (ContactPeak).
+(ContactForce), a = sqrt(A / pi) from the whole patch's area A (ContactArea), the contact radius
+along the meridians on the symmetry faces y = 0 and x = 0 (a_x, a_y: ContactRadius), p0
+(ContactPeak).
 Prints a Markdown table (ratios to the references) and writes ``hertz3d.csv``.
 """
 from __future__ import annotations
@@ -69,12 +71,13 @@ def row(r: dict) -> str:
     """The run's line of the Markdown table."""
     cf, hp = closed_form(), at_force(r["P"])
     return (f"| {r['h']:g} | {r['dofs']} | {r['P']:.6g} | {r['P'] / cf['P']:.4f} | {r['a']:.4g} | "
-            f"{r['a'] / hp['a']:.4f} | {r['a'] / cf['a']:.4f} | {r['p0']:.5g} | {r['p0'] / hp['p0']:.4f} | "
+            f"{r['a'] / hp['a']:.4f} | {r['a'] / cf['a']:.4f} | {r['a_x'] / hp['a']:.4f} | {r['a_y'] / hp['a']:.4f} | "
+            f"{r['p0']:.5g} | {r['p0'] / hp['p0']:.4f} | "
             f"{r['p0'] / cf['p0']:.4f} | {r['newton_its']} | {r['wall_s']:.0f} |")
 
 
-HEADER = ("| h | dofs | P | P / P(d) | a | a / a(P) | a / a(d) | p0 | p0 / p0(P) | p0 / p0(d) | Newton its | wall s |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|---|")
+HEADER = ("| h | dofs | P | P / P(d) | a | a / a(P) | a / a(d) | a_x / a(P) | a_y / a(P) | p0 | p0 / p0(P) | "
+          "p0 / p0(d) | Newton its | wall s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def main(argv=None) -> None:
