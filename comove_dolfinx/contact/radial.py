@@ -16,8 +16,10 @@ in contact reaches zero; a zone that reaches the meridian's end ends there). The
 the largest distance from the axis of the zones' edges, in current coordinates (under linear
 kinematics too), and 0 without contact; where the contact set is a disc about the axis, its radius.
 
-An edge shared by two facets of the boundary (a meridian across the boundary rather than along its
-border) is refused, as is a meridian that meets no facet's edge (ContactError).
+An edge of two facets of the boundary (a meridian across the boundary, not along its border)
+takes the mean of the two facets' samples (the same on any partition: the sum of two numbers does
+not depend on their order). A meridian that meets no facet's edge, or in whose half-plane a facet
+lies, is refused (ContactError).
 """
 from __future__ import annotations
 
@@ -59,8 +61,8 @@ class MeridianProfile(FacetProfile):
 
     def _segments(self, ctx) -> tuple[list, list]:
         """The reference cell's edges and face normals; keeps the rank's facets that have an edge in
-        the half-plane (``self._segment``: that edge). ContactError if no facet has one, a facet
-        lies in the half-plane or an edge belongs to two facets."""
+        the half-plane (``self._segment``: that edge). ContactError if no facet has one or a facet
+        lies in the half-plane."""
         vertices, edges, faces = _CELLS_3D[compat.cell_name(self.mesh)]
         X = self._vertices(ctx, vertices)
         on = self._in_half_plane(X)
@@ -76,9 +78,10 @@ class MeridianProfile(FacetProfile):
         keep = segment >= 0
         self._pfacets, self._pcells, self._local = self._pfacets[keep], self._pcells[keep], self._local[keep]
         self._segment = segment[keep]
-        ends = np.array([[X[i, a], X[i, b]] for i, (a, b) in
-                         zip(np.flatnonzero(keep), (edges[j] for j in self._segment))]).reshape(-1, 2, 3)
-        self._check_edges(np.concatenate(self.comm.allgather(ends)))
+        if not self.comm.allreduce(int(keep.sum()), op=MPI.SUM):
+            raise ContactError(f"no facet of the contact boundary has an edge on {self._what}: give a "
+                               "half-plane that runs along edges of the boundary's mesh (a symmetry plane's)")
+        self._merge = None
         return ([(vertices[a], vertices[b]) for a, b in edges], [nr for _, nr in faces])
 
     def _vertices(self, ctx, vertices) -> np.ndarray:
@@ -97,17 +100,15 @@ class MeridianProfile(FacetProfile):
         d = X - self.origin
         return (np.abs(d @ self.normal) <= tol) & (d @ self.across >= -tol)
 
-    def _check_edges(self, ends: np.ndarray) -> None:
-        """ContactError if there are no sampled edges (``ends``: every rank's, (edges, 2, 3)), or if
-        one belongs to two facets."""
-        if not len(ends):
-            raise ContactError(f"no facet of the contact boundary has an edge on {self._what}: give a "
-                               "half-plane that runs along edges of the boundary's mesh (a symmetry plane's)")
-        scale = max(float(np.ptp(ends)), 1e-300)
-        keys = {tuple(sorted(map(tuple, np.rint(e / scale * 1e9).astype(np.int64).tolist()))) for e in ends}
-        if len(keys) < len(ends):
-            raise ContactError(f"{self._what} runs across the contact boundary (an edge of two of its "
-                               "facets): give one along the boundary's border (a symmetry plane's)")
+    def _evaluate(self) -> np.ndarray:
+        """The samples of every edge (FacetProfile._evaluate), one row per edge: the mean of its
+        facets' rows, each turned to run from its end with the smaller reference coordinates."""
+        D = super()._evaluate()
+        if self._merge is None:
+            self._merge = same_edges(D[:, 0, self._C["X"]], D[:, -1, self._C["X"]])
+        flipped, groups = self._merge
+        D[flipped] = D[flipped, ::-1]
+        return np.array([D[g].mean(axis=0) for g in groups]).reshape(-1, *D.shape[1:])
 
     def _chain(self, D: np.ndarray) -> tuple:
         """The sampled edges joined end to end by their reference coordinates in the half-plane."""
@@ -123,6 +124,19 @@ class MeridianProfile(FacetProfile):
             return 0.0
         d = np.array([z.start for z in zs] + [z.end for z in zs]) - self.origin
         return float(np.linalg.norm(d - np.outer(d @ self.axis, self.axis), axis=1).max())
+
+
+def same_edges(A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, list]:
+    """Segments (end points A, B, (n, 3)) that are the same edge: (which run from their larger end
+    point to the smaller, the groups of the same edge's rows in the order of their end points)."""
+    scale = max(float(np.ptp(np.vstack([A, B]))) if len(A) else 0.0, 1e-300)
+    key = lambda P: [tuple(r) for r in np.rint(P / scale * 1e9).astype(np.int64).tolist()]  # noqa: E731
+    ka, kb = key(A), key(B)
+    flipped = np.array([a > b for a, b in zip(ka, kb)], dtype=bool)
+    groups: dict = {}
+    for i, (a, b) in enumerate(zip(ka, kb)):
+        groups.setdefault((min(a, b), max(a, b)), []).append(i)
+    return flipped, [groups[k] for k in sorted(groups)]
 
 
 class Meridians:
