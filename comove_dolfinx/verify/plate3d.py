@@ -65,7 +65,7 @@ TOL = {"w": 0.01, "F": 0.01, "a": 0.01}
 SMALL_MESH = {"size": 1.0, "size_rim": 0.25, "size_contact": 0.5, "contact_radius": 3.0}
 SMALL_LOAD = ("p_max=5.0", "n_increments=10")   # the first half of the scene's increments
 SMALL_SIZE_2D = 0.125
-SMALL_TOL = {"w": 0.01, "F": 0.015, "a": 0.01}
+SMALL_TOL = {"w": 0.01, "F": 0.015, "a": 0.2}     # a: in elements (docstring)
 
 
 def quarter_job(scene, mesh: dict, comm=MPI.COMM_WORLD):
@@ -105,9 +105,12 @@ def compare(mesh: dict, comm=MPI.COMM_WORLD, size_2d: float = SIZE_2D, overrides
             "its": (its2, its3), "cpu": (cpu2, cpu3)}
 
 
-def _worst(c: dict, key: str, rows: list) -> float:
-    """The largest relative difference of quantity ``key`` over the common increments ``rows``."""
+def _worst(c: dict, key: str, rows: list, unit: float | None = None) -> float:
+    """The largest relative difference of quantity ``key`` over the common increments ``rows`` (with
+    ``unit``: the largest difference in that unit)."""
     ref = "a" if key.startswith("a_") else key
+    if unit is not None:
+        return max(abs(c["3d"][key][j] - c["2d"][ref][i]) / unit for i, j in rows)
     return max(abs(c["3d"][key][j] / c["2d"][ref][i] - 1.0) for i, j in rows)
 
 
@@ -122,17 +125,22 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
     before = [(i, j) for i, j in c["common"] if c["2d"]["F"][i] == 0.0]
     dofs, its, cpu = f"({c['dofs'][1]} dofs against {c['dofs'][0]})", sum(c["its"]), sum(c["cpu"])
     where = f"{len(touching)} increments with a > {A_FROM * radius:g}"
-    rows = [("w", f"centre deflection before contact, {len(before)} increments", before),
-            ("F", f"force on the base, {where}", touching),
-            ("a_x", f"contact radius along the bottom's edge on y = 0, {where}", touching),
-            ("a_y", f"contact radius along the bottom's edge on x = 0, {where}", touching)]
-    checks = [Check(TITLE, SOURCE, f"{label} {dofs}: largest relative difference", 0.0,
-                    _worst(c, key, sel), tol[key[0]], its, cpu) for key, label, sel in rows]
+    # the small mesh's radius: in elements, h the bottom's size plus the reference's (docstring)
+    unit = mesh["size_contact"] + size_2d if small else None
+    per = f"largest difference / {unit:g} (the two meshes' sizes at the edge)" if small else \
+        "largest relative difference"
+    rows = [("w", f"centre deflection before contact, {len(before)} increments", before, None),
+            ("F", f"force on the base, {where}", touching, None),
+            ("a_x", f"contact radius along the bottom's edge on y = 0, {where}", touching, unit),
+            ("a_y", f"contact radius along the bottom's edge on x = 0, {where}", touching, unit)]
+    checks = [Check(TITLE, SOURCE, f"{label} {dofs}: {per if u else 'largest relative difference'}", 0.0,
+                    _worst(c, key, sel, u), tol[key[0]], its, cpu) for key, label, sel, u in rows]
     _plot(out, c, comm)
     if comm.rank == 0:
-        print(f"plate3d: contact radius sqrt(4 A / pi) from the contact area against the axisymmetric one "
-              f"{dofs}: largest relative difference {_worst(c, 'a_area', touching):.4f} over "
-              f"{len(touching)} increments (reported, not checked)", flush=True)
+        print(f"plate3d: contact radius against the axisymmetric one {dofs}, largest relative differences "
+              f"over {len(touching)} increments: along y = 0 {_worst(c, 'a_x', touching):.4f}, along x = 0 "
+              f"{_worst(c, 'a_y', touching):.4f}, sqrt(4 A / pi) from the contact area "
+              f"{_worst(c, 'a_area', touching):.4f} (reported)", flush=True)
     return checks
 
 
