@@ -58,7 +58,7 @@ _API = {
     "job": ("Step", "Job", "Results", "JobError"),
     "solver": ("NewtonSettings", "SettingsError"),
     "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "ContactPeak",
-               "ContactArea", "Reaction", "MaxPlasticStrain", "Value"),
+               "ContactArea", "ContactRadius", "Reaction", "MaxPlasticStrain", "Value"),
     "io": ("Writer", "HistoryCSV", "VTK", "XDMF", "RunInfo", "Console", "Snapshots", "read_history"),
     "presets": ("get_scene", "SCENES"),
 }

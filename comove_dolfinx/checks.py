@@ -97,6 +97,27 @@ def first(*messages) -> str | None:
     return next((m for m in messages if m is not None), None)
 
 
+def meridian_error(origin, direction, axis) -> str | None:
+    """Why ``origin``, ``direction``, ``axis`` do not give a meridian's half-plane (the axis through
+    ``origin`` along ``axis``, on the side of ``direction``), or None."""
+    def vector(value):
+        flat = list(value) if isinstance(value, (list, tuple)) or getattr(value, "ndim", 0) == 1 else []
+        ok = len(flat) == 3 and all(is_number(v) and math.isfinite(v) for v in flat)
+        return [float(v) for v in flat] if ok else None
+    o, d, a = vector(origin), vector(direction), vector(axis)
+    for name, value, given, what in (("origin", origin, o, "a point on the axis"),
+                                     ("axis", axis, a, "the axis's direction"),
+                                     ("direction", direction, d, "towards the meridian's side of the axis")):
+        if given is None or (name != "origin" and not any(given)):
+            zero = "" if name == "origin" else ", not all zero"
+            return f"{name} = {value!r}: give 3 finite numbers{zero} ({what})"
+    cross = [d[1] * a[2] - d[2] * a[1], d[2] * a[0] - d[0] * a[2], d[0] * a[1] - d[1] * a[0]]
+    if math.hypot(*cross) <= 1e-9 * math.hypot(*d) * math.hypot(*a):
+        return (f"direction = {direction!r} is parallel to axis = {axis!r}: give a direction across the "
+                "axis (towards the meridian's side of it)")
+    return None
+
+
 # -- Newton's settings ----------------------------------------------------------------------------
 def _tolerance(name: str, value) -> str | None:
     return number(name, value, ge=0, what=" (0 turns this test off)")

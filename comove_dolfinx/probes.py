@@ -12,6 +12,7 @@ the same values. A job's history is the increment, time and load columns followe
     cm.ContactLength(contact, "contact_width", scale=2.0)
     cm.ContactPeak(contact, "p_max")                  # the largest contact pressure
     cm.ContactArea(contact, "area", scale=4.0)        # 3D: the contact area (four quarters)
+    cm.ContactRadius(contact, "a", direction=(1, 0, 0))   # 3D: the contact radius along y = 0
     cm.Reaction("left")                               # left_fx, left_fy: the supports' force
     cm.MaxPlasticStrain()
     cm.Value("crown_gap", lambda model: ...)          # anything else, from the model
@@ -23,7 +24,7 @@ from typing import Callable
 import numpy as np
 from mpi4py import MPI
 
-from .checks import choice, first, number, text
+from .checks import choice, first, meridian_error, number, text
 
 
 class ProbeError(ValueError):
@@ -51,7 +52,8 @@ def check_contacts(probes, items) -> None:
     """ProbeError naming the first probe that reads a contact which is not one of ``items`` (it would
     read a contact that the job never builds)."""
     for probe in probes:
-        if not isinstance(probe, (ContactForce, ContactLength, ContactEdges, ContactPeak, ContactArea)):
+        if not isinstance(probe, (ContactForce, ContactLength, ContactEdges, ContactPeak, ContactArea,
+                                  ContactRadius)):
             continue
         contact, name = probe.contact, f"{type(probe).__name__} {probe.columns[0]!r}"
         if contact is None:
@@ -193,6 +195,36 @@ class ContactArea(Probe):
 
     def __call__(self, model) -> dict:
         return {self.columns[0]: self.scale * self.contact.zone().extent}
+
+
+class ContactRadius(Probe):
+    """3D: the contact radius along a meridian of the contact boundary (times ``scale``; one column
+    ``name``): the half-plane that the axis through ``origin`` along ``axis`` bounds on the side of
+    ``direction`` cuts the boundary along edges of its facets (a symmetry plane's border, say: the
+    bottom's edge on y = 0 of a plate quarter with the defaults); the pressure is sampled along
+    them as along a 2D boundary, the contact set's edges found as :class:`ContactLength` finds
+    them (extrapolated beyond the last points in contact), and the radius is their largest current
+    distance from the axis, 0 without contact (contact/radial.py). A meridian that meets no facet's
+    edge is refused when the job starts."""
+
+    def __init__(self, contact, name: str = "contact_radius", origin=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0),
+                 axis=(0.0, 0.0, 1.0), scale: float = 1.0):
+        _columns(name, scale)
+        why = meridian_error(origin, direction, axis)
+        _refuse(None if why is None else f"ContactRadius {name!r}: {why}")
+        self.contact, self.scale, self.columns = _contact_of(f"ContactRadius {name!r}", contact), scale, (name,)
+        self.meridian = (tuple(map(float, origin)), tuple(map(float, direction)), tuple(map(float, axis)))
+
+    def attach(self, model) -> None:
+        _body_dim(f"ContactRadius {self.columns[0]!r}", model, (3,), "ContactLength (the contact length)")
+        from .contact import ContactError
+        try:
+            self.contact.meridian(*self.meridian)
+        except ContactError as err:
+            raise ProbeError(f"ContactRadius {self.columns[0]!r}: {err}") from None
+
+    def __call__(self, model) -> dict:
+        return {self.columns[0]: self.scale * self.contact.radius(*self.meridian)}
 
 
 class ContactEdges(Probe):

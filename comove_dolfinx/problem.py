@@ -34,7 +34,7 @@
     [newton]                     # any NewtonSettings field
     scale = "force"
 
-    [[probes]]                   # node, contact_force, contact_length (contact_area in 3D), contact_peak,
+    [[probes]]                   # node, contact_force, contact_length (3D: contact_area, contact_radius), contact_peak,
                                  # reaction, max_plastic_strain
     type = "contact_force"
     item = "plate"
@@ -175,11 +175,12 @@ def _of_dimension(path: pathlib.Path, data: dict, dim: int) -> None:
             use = ", ".join(("plane",) + (OBSTACLES_3D if dim == 3 else OBSTACLES_2D))
             raise ProblemError(f"{path}: [[items]] {k} (contact) obstacle: type = {otype!r} is a {5 - dim}D "
                                f"obstacle, {body}: choose one of {use}")
-    wrong = {3: ("contact_length", "contact_area"), 2: ("contact_area", "contact_length")}[dim]
+    wrong = {3: {"contact_length": "contact_area"},
+             2: {"contact_area": "contact_length", "contact_radius": "contact_length"}}[dim]
     for k, t in enumerate(data.get("probes", []), 1):
-        if t["type"] == wrong[0]:
-            raise ProblemError(f"{path}: [[probes]] {k}: type = {wrong[0]!r} is not defined when {body}: "
-                               f"use {wrong[1]}")
+        if t["type"] in wrong:
+            raise ProblemError(f"{path}: [[probes]] {k}: type = {t['type']!r} is not defined when {body}: "
+                               f"use {wrong[t['type']]}")
 
 
 def _items(path: pathlib.Path, items: list) -> dict:
@@ -368,6 +369,9 @@ def _probe(s: dict, named: dict, dim: int = 2):
         return probes.ContactLength(named[s["item"]], s.get("column", "contact_length"), scale)
     if kind == "contact_area":
         return probes.ContactArea(named[s["item"]], s.get("column", "contact_area"), scale)
+    if kind == "contact_radius":
+        where = {k: s[k] for k in ("origin", "direction", "axis") if k in s}
+        return probes.ContactRadius(named[s["item"]], s.get("column", "contact_radius"), scale=scale, **where)
     if kind == "contact_peak":
         return probes.ContactPeak(named[s["item"]], s.get("column", "peak_pressure"), scale)
     if kind == "reaction":

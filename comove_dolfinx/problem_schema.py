@@ -52,6 +52,8 @@ PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": s
           "contact_force": {"item": str, "column": str, "component": int, "scale": float},
           "contact_length": {"item": str, "column": str, "scale": float},
           "contact_area": {"item": str, "column": str, "scale": float},
+          "contact_radius": {"item": str, "column": str, "origin": "vector", "direction": "vector",
+                             "axis": "vector", "scale": float},
           "contact_peak": {"item": str, "column": str, "scale": float},
           "reaction": {"boundary": str, "name": str},
           "max_plastic_strain": {}}

@@ -51,7 +51,10 @@ def test_hertz_sphere_octant_on_a_flat(cache):
     about 11 % more), a within 2 % and p0 within 3 % of them, and of Hertz at the computed force, on
     a coarse mesh (5 elements across a: the area counts an edge band of facets by their quadrature
     points, the peak is a nodal value); the force at d = 2 within 1 % of the axisymmetric model's.
-    The docs' finer mesh (10 across a): docs/solids.md, "Hertz"."""
+    The contact radius along the two meridians on the symmetry faces (ContactRadius: the edge
+    extrapolated as in 2D) within a fifth of an element of Hertz's, 0.2 h / a = 4 %: the bound the
+    2D edge keeps against Hertz's line contact (docs/api.md, "Contact results"). The docs' finer
+    mesh (10 across a): docs/solids.md, "Hertz"."""
     first, run = hertz3d.at_hertz_force(2.0, cache_dir=cache)
     assert first["P"] == pytest.approx(_hertz_axisymmetric(cache), rel=0.01)
     assert 1.05 < first["P"] / hertz3d.closed_form()["P"] < 1.15      # the finite sphere's stiffness
@@ -61,6 +64,8 @@ def test_hertz_sphere_octant_on_a_flat(cache):
     assert run["p0"] == pytest.approx(target["p0"], rel=0.03)
     hertz = hertz3d.at_force(run["P"])
     assert run["a"] == pytest.approx(hertz["a"], rel=0.02)
+    for key in ("a_x", "a_y"):
+        assert run[key] == pytest.approx(hertz["a"], abs=0.2 * 2.0), key
     assert run["p0"] == pytest.approx(hertz["p0"], rel=0.03)
 
 

@@ -252,6 +252,8 @@ BAD_KEYS = [
      "choose one of plane, circle, profile, gmsh_profile"),
     ('type = "contact_force"', 'type = "contact_area"',
      "[[probes]] 1: type = 'contact_area' is not defined when the body is 2D (kind = 'plane_strain'): use contact_length"),
+    ('type = "contact_force"', 'type = "contact_radius"',
+     "[[probes]] 1: type = 'contact_radius' is not defined when the body is 2D (kind = 'plane_strain'): use contact_length"),
 ]
 
 

@@ -124,26 +124,34 @@ column = "P"
 type = "contact_area"
 item = "ball"
 column = "A"
+[[probes]]
+type = "contact_radius"
+item = "ball"
+column = "a"
+origin = [0.5, 0.5, 0.0]
 """
 SPHERE = 'obstacle = { type = "sphere", centre = [0.5, 0.5, -2.0], radius = 2.0, motion = [0.0, 0.0, 0.02] }'
 
 
 def test_a_sphere_pressed_on_a_block_from_a_problem_file(tmp_path):
-    """A ball rising under a block: the file's force and contact area are those of the same job
+    """A ball rising under a block: the file's force, contact area and contact radius (along the
+    meridian from the ball's axis towards +x, across the bottom face) are those of the same job
     built with the API, the area in the history a part of the bottom face that grows as the
-    ball rises."""
+    ball rises, and so does the radius."""
     path = tmp_path / "ball.toml"
     path.write_text(BALL.replace("OBSTACLE", SPHERE))
     from mpi4py import MPI
     from_file = problem.build(problem.read(path), MPI.COMM_WORLD).run()
     body = cm.Body(cm.box(1.0, 1.0, 0.5, 0.25, order=1), "solid", cm.Elastic(1000.0, 0.3), degree=1)
     c = cm.Contact("bottom", cm.Sphere((0.5, 0.5, -2.0), 2.0, motion=(0.0, 0.0, 0.02)), method="nitsche")
-    probes = [cm.ContactForce(c, "P", component=2), cm.ContactArea(c, "A")]
+    probes = [cm.ContactForce(c, "P", component=2), cm.ContactArea(c, "A"),
+              cm.ContactRadius(c, "a", origin=(0.5, 0.5, 0.0))]
     from_api = cm.Job(body, [cm.Fixed("top"), c], [cm.Step(2)], probes=probes, writers=[]).run()
     assert from_file.completed and from_api.completed
-    for column in ("P", "A"):
+    for column in ("P", "A", "a"):
         assert np.array_equal(from_file[column], from_api[column]), column
     assert 0.0 < from_file["A"][-2] < from_file["A"][-1] < 1.0 and from_file["P"][-1] > 0.0
+    assert 0.0 < from_file["a"][-2] < from_file["a"][-1] < 0.5
 
 
 ARC_GEO = """

@@ -68,10 +68,13 @@ def test_plate3d(tmp_path, comm):
     """The plate scene as a quarter of the disc in P2 tetrahedra (size 1; 0.25 on the rim support, 0.5
     on the bottom) against the axisymmetric plate (size 0.125), up to half the scene's pressure: the
     centre's deflection before contact within 1 % (measured 0.25 %) and the force on the base within
-    1.5 % (0.91 %) where the contact radius exceeds R/8. The differences fall with the 3D mesh (the
-    case's docstring and docs/verification.md: 1.38 % and 5.6 % on size 1 without refinement)."""
+    1.5 % (0.91 %) where the contact radius exceeds R/8, and there the contact radius along both
+    symmetry edges of the bottom within 4.5 % (measured 4.0 %), the difference of the axisymmetric
+    model at the quarter's bottom size (0.5) from the same reference (4.45 %). The differences fall
+    with the 3D mesh (the case's docstring and docs/verification.md: 1.38 % and 5.6 % on size 1
+    without refinement)."""
     checks = _run_small("plate3d", tmp_path, comm)
-    assert len(checks) == 2
+    assert len(checks) == 4
 
 
 def test_punch(tmp_path, comm):

@@ -17,7 +17,9 @@ Hertz's force. So each mesh runs twice: first to d = 2, then, from a fresh start
 travel d1 = 2 (P_H / P)^(1/m) at which it carries Hertz's force P_H = 586081 for the approach 2
 (m = d ln P / d ln d over the first run's last increment, about 1.55 where Hertz has 1.5), where a and p0 are
 compared with a = 10 and p0 = 2798.3, and with Hertz at the force computed. Measured: P
-(ContactForce), a = sqrt(A / pi) from the whole patch's area A (ContactArea), p0 (ContactPeak).
+(ContactForce), a = sqrt(A / pi) from the whole patch's area A (ContactArea), the contact radius
+along the meridians on the symmetry faces y = 0 and x = 0 (a_x, a_y: ContactRadius, its edge
+extrapolated as in 2D), p0 (ContactPeak).
 Prints a Markdown table (ratios to the references) and writes ``hertz3d.csv``.
 """
 from __future__ import annotations
@@ -59,7 +61,8 @@ def octant_run(size_contact: float, cache_dir="meshes", n_increments: int = 4, d
     items = [cm.Fixed("xsym", component=0), cm.Fixed("ysym", component=1),
              cm.Displacement("zsym", d, component=2), c]
     probes = [cm.ContactForce(c, "P", component=2, scale=-4.0), cm.ContactArea(c, "A", scale=4.0),
-              cm.ContactPeak(c, "p0")]
+              cm.ContactPeak(c, "p0"), cm.ContactRadius(c, "a_x", direction=(1.0, 0.0, 0.0)),
+              cm.ContactRadius(c, "a_y", direction=(0.0, 1.0, 0.0))]
     res = cm.Job(body, items, [cm.Step(n_increments)], probes).run()
     if not res.completed:
         raise RuntimeError(res.message)
@@ -67,8 +70,8 @@ def octant_run(size_contact: float, cache_dir="meshes", n_increments: int = 4, d
     forces, times = np.asarray(res["P"]), np.asarray(res["time"])
     slope = float(np.log(forces[-1] / forces[-2]) / np.log(times[-1] / times[-2]))
     cpu = comm.allreduce(time.process_time() - t0, op=MPI.SUM) / comm.size
-    return dict(h=size_contact, dofs=res.dofs, d=d, P=P, a=float(np.sqrt(A / np.pi)), p0=p0,
-                slope=slope, newton_its=int(sum(res.newton_its)), cpu_s=cpu, wall_s=time.perf_counter() - w0)
+    return dict(h=size_contact, dofs=res.dofs, d=d, P=P, a=float(np.sqrt(A / np.pi)), a_x=res.last["a_x"],
+                a_y=res.last["a_y"], p0=p0, slope=slope, newton_its=int(sum(res.newton_its)), cpu_s=cpu, wall_s=time.perf_counter() - w0)
 
 
 def at_hertz_force(size_contact: float, cache_dir="meshes", n_increments: int = 4) -> tuple[dict, dict]:
@@ -83,12 +86,13 @@ def row(r: dict) -> str:
     """The run's line of the Markdown table."""
     cf, hp = closed_form(), at_force(r["P"])
     return (f"| {r['h']:g} | {r['dofs']} | {r['d']:.4f} | {r['P']:.6g} | {r['P'] / cf['P']:.4f} | "
-            f"{r['a']:.4g} | {r['a'] / cf['a']:.4f} | {r['a'] / hp['a']:.4f} | {r['p0']:.5g} | "
+            f"{r['a']:.4g} | {r['a'] / cf['a']:.4f} | {r['a'] / hp['a']:.4f} | {r['a_x'] / hp['a']:.4f} | "
+            f"{r['a_y'] / hp['a']:.4f} | {r['p0']:.5g} | "
             f"{r['p0'] / cf['p0']:.4f} | {r['p0'] / hp['p0']:.4f} | {r['newton_its']} | {r['wall_s']:.0f} |")
 
 
-HEADER = ("| h | dofs | d | P | P / P_H | a | a / 10 | a / a(P) | p0 | p0 / 2798.3 | p0 / p0(P) | Newton its | wall s |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+HEADER = ("| h | dofs | d | P | P / P_H | a | a / 10 | a / a(P) | a_x / a(P) | a_y / a(P) | p0 | p0 / 2798.3 | "
+          "p0 / p0(P) | Newton its | wall s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def main(argv=None) -> None:

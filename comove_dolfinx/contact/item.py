@@ -29,8 +29,8 @@ The item is made of parts that each do one job: ``terms`` (terms.py: the residua
 normal and tangential laws), ``history`` (history.py: what it carries between increments, the lag
 state of friction and the penalty's stick part) and ``outputs`` (outputs.py: the force, the contact
 zone, its edges, the pressure profile at the quadrature points, the peak pressure, the largest nodal
-penetration, the lengths that stick and slip and the nodal fields of pressure and shear), whose
-results are the item's too.
+penetration, the lengths that stick and slip, the nodal fields of pressure and shear and, in 3D,
+the contact radius along a meridian), whose results are the item's too.
 """
 from __future__ import annotations
 
@@ -191,3 +191,5 @@ class Contact(Item):
     stick_slip = delegate("outputs.stick_slip")
     zone_edges = delegate("outputs.zone_edges")
     zone = delegate("outputs.zone")
+    meridian = delegate("outputs.meridians.meridian")
+    radius = delegate("outputs.meridians.radius")

@@ -18,7 +18,8 @@ In 3D (a body of kind ``solid``) the traction is p n_o + q, q the tangential tra
 force has three components; the contact set's measure is its area (the current area of the parts
 of the boundary's facets where the pressure at the facet quadrature points is positive; the
 reference area under linear kinematics); the peak pressure is the largest value of the nodal
-pressure field; the profile along the boundary and the zones' edges are 2D only.
+pressure field; the profile along the boundary and the zones' edges are 2D only, and the contact
+radius along a meridian of the boundary 3D only (``meridians``: radial.py).
 
 Every method is collective (every rank calls it, and gets the same result).
 """
@@ -36,6 +37,7 @@ from ..delegation import delegate
 from .fields import BoundaryFields, BoundaryNodes
 from .obstacles import ContactError
 from .profile import FacetProfile
+from .radial import Meridians
 from .zones import ContactProfile, Zone, edge_fraction, gauss_points, peak_of, zones_of
 
 __all__ = ["ContactOutputs", "ContactProfile", "Zone", "ZoneInfo", "edge_fraction", "gauss_points",
@@ -60,8 +62,9 @@ class ContactOutputs:
     It reads the item's terms (contact/terms.py) and compiles its forms and expressions on first
     use, so that a run that never asks for a result does not pay for its compilation. Its parts:
     ``boundary`` (the boundary's nodes, fields.BoundaryNodes), ``fields`` (the nodal pressure and
-    shear, fields.BoundaryFields) and ``facet_profile`` (the pressure profile, its zones and peak,
-    profile.FacetProfile).
+    shear, fields.BoundaryFields), ``facet_profile`` (2D: the pressure profile, its zones and peak,
+    profile.FacetProfile) and ``meridians`` (3D: the profiles along meridians of the boundary and
+    the contact radius, radial.Meridians).
     """
 
     def __init__(self, item, ctx):
@@ -89,6 +92,7 @@ class ContactOutputs:
         self.fields = BoundaryFields(ctx, item.boundary, p_cur, q_cur, terms.ds, self.boundary, self.comm)
         self.facet_profile = None if self.dim == 3 else \
             FacetProfile(ctx, item.obstacle, item.u, p_cur, q_cur, N, ctx.facets(item.boundary), self.comm)
+        self.meridians = Meridians(ctx, item, p_cur, q_cur, N)
 
     def _form(self, name: str):
         """The compiled form ``name`` (collective: every rank asks for it at the same point)."""
