@@ -107,14 +107,6 @@ def _write_if_changed(path: pathlib.Path, text: str) -> None:
         path.write_text(text)
 
 
-def _first_line(path: pathlib.Path) -> str:
-    """The first line of a module's docstring (its summary), read without importing it."""
-    import ast
-
-    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
-    return doc.strip().split("\n")[0].rstrip(".") if doc.strip() else ""
-
-
 def write_reference_pages(app):
     """docs/reference/: one page per package of comove_dolfinx (the package and each of its
     modules, from their docstrings), generated at every build so that a new module has its page;
@@ -128,7 +120,7 @@ def write_reference_pages(app):
         name = ".".join(pkg.relative_to(ROOT).parts)
         modules = [name] + [f"{name}.{f.stem}" for f in sorted(pkg.glob("*.py"))
                             if not f.name.startswith("__")]
-        lines = [f"# `{name}`", "", _first_line(pkg / "__init__.py") + ".", ""]
+        lines = [f"# `{name}`", ""]                  # the package's docstring follows (automodule)
         for module in modules:
             if module != name:
                 lines += [f"## `{module}`", ""]
@@ -144,7 +136,7 @@ def write_reference_pages(app):
              "packages on a page of its own. `import comove_dolfinx as cm` gives the public names "
              "(`comove_dolfinx`'s list below); [The public API, by example](../api.md) shows them in "
              "use.", "",
-             "```{toctree}", ":maxdepth: 1", "", *pages[1:], "```", "", *top[4:]]
+             "```{toctree}", ":maxdepth: 1", "", *pages[1:], "```", "", *top[2:]]
     _write_if_changed(out / "index.md", "\n".join(index))
     for old in out.glob("*.md"):                   # the page of a package that is gone
         if old.stem not in pages:
