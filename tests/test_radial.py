@@ -80,26 +80,31 @@ def _indented(cache, comm):
               cm.ContactArea(c, "A")]
     res = cm.Job(body, items, [cm.Step(2)], probes).run()
     assert res.completed, res.message
-    return res
+    return res, c
 
 
 def test_the_radius_of_a_partial_contact_lies_beyond_the_last_point_in_contact(cache):
-    """The edge lies between the last point in contact along the meridian and the first one out,
-    and the quarter disc of that radius has about the contact area (the area counts the facets cut
-    by the edge by their quadrature points: within the band of one element, 0.05, of the radius)."""
-    res = _indented(cache, MPI.COMM_WORLD)
+    """Along each meridian the edge lies between the last sampled point in contact (p > 0) and the
+    first one out, by their current distances from the axis, and the quarter disc of that radius
+    has about the contact area (the area counts the facets cut by the edge by their quadrature
+    points: within the band of one element, 0.05, of the radius)."""
+    res, c = _indented(cache, MPI.COMM_WORLD)
     last = res.last
-    for name in ("ax", "ay"):
+    for name, direction in (("ax", (1.0, 0.0, 0.0)), ("ay", (0.0, 1.0, 0.0))):
         a = last[name]
-        assert 0.1 < a < 0.25
+        prof = c.meridian(direction=direction).profile()
+        r = np.hypot(prof.x[:, 0], prof.x[:, 1])
+        inside, outside = r[prof.p > 0.0], r[prof.p == 0.0]
+        assert inside.size and outside.size and inside.max() < outside.min()
+        assert inside.max() <= a <= outside.min()
         assert np.sqrt(4.0 * last["A"] / np.pi) == pytest.approx(a, abs=0.05)
 
 
 @pytest.mark.mpi
 def test_the_radius_on_two_ranks_is_the_serial_one(cache):
     """The same job distributed over the ranks and, on every rank, on its own (COMM_SELF)."""
-    par = _indented(cache, MPI.COMM_WORLD)
-    ser = _indented(cache, MPI.COMM_SELF)
+    par, _ = _indented(cache, MPI.COMM_WORLD)
+    ser, _ = _indented(cache, MPI.COMM_SELF)
     for col in ("ax", "ay", "A"):
         np.testing.assert_allclose(par[col], ser[col], rtol=1e-7, atol=1e-12, err_msg=col)
 
