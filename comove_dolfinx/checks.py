@@ -393,6 +393,10 @@ def check_job(body, items, steps, probes, writers, newton, load) -> None:
     from .job import JobError
     from .probes import check_contacts
     why = _parts_error(body, items, steps, probes, writers, newton, load)
+    if why is None and getattr(body, "fbar", False) and any(
+            getattr(item, "method", None) == "nitsche" for item in items):
+        why = ("fbar = True with Nitsche contact: Nitsche's facet stress is not averaged; give the "
+               "contact method='penalty' (or leave fbar out)")
     if why is not None:
         raise JobError(why)
     check_contacts(probes, items)

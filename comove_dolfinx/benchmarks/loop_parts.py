@@ -35,7 +35,7 @@ def _cases(run: dict, floor_it: ElasticFloor) -> dict:
         "residual (stress evaluated again)": lambda: (m.evaluate_stress(again=True), newton.residual()),
         "stress evaluation": lambda: m.evaluate_stress(again=True),
         "residual without the stress": newton.residual,
-        "Jacobian": lambda: compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs),
+        "Jacobian": lambda: m.assemble_jacobian(newton.A),
         "floor: elastic matrix": lambda: compat.assemble_matrix(floor_it.A, floor_it.a, m.bcs),
         "floor: elastic residual": lambda: compat.assemble_vector(floor_it.b, floor_it.L, floor_it.a,
                                                                   m.bcs, w),
@@ -75,7 +75,7 @@ def _size_rows(size: float, increments: int, repeats: int) -> list[dict]:
     du = compat.petsc_vec(m.du)
 
     def factorise():
-        compat.assemble_matrix(newton.A, m.jacobian_form, m.bcs)
+        m.assemble_jacobian(newton.A)
         linear.solve(newton.ksp, newton.petsc_options, newton.b, du, m.comm)
     rows = []
     for name, part in _cases(run, floor_it).items():

@@ -166,7 +166,7 @@ def factor_solve(newton: Newton, options: dict, repeats: int) -> list[float]:
     x = newton.b.duplicate()
     out = []
     for k in range(repeats + 1):
-        compat.assemble_matrix(A, m.jacobian_form, m.bcs)   # a new state: a new factorisation
+        m.assemble_jacobian(A)   # a new state: a new factorisation
         m.comm.barrier()
         c0 = cpu()
         with pushed(options):

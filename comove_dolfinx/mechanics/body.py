@@ -47,6 +47,12 @@ class Body:
         quadrilaterals and hexahedra the full Gauss rules, 4 (3 x 3 (x 3) points) for Q2 and 2
         (2 x 2 (x 2)) for Q1, one more in axisymmetry: fewer points leave the cells modes without
         stiffness).
+    fbar : bool
+        F-bar (B-bar under linear kinematics): the stress sees the volume change averaged over
+        each cell (mechanics/volume.py, docs/theory.md section 5.5), which lifts the volumetric
+        locking of Q1 quadrilaterals and hexahedra in plastic flow (docs/verification.md, the flat
+        punch). Not for plane stress (which does not lock), P1 triangles and tetrahedra (one
+        volume change per cell already: use ``degree=2``) or Nitsche contact.
 
     Every value is checked here: one that cannot be used raises :class:`BodyError` (or
     ``MaterialError``) naming it and the fix.
@@ -59,6 +65,7 @@ class Body:
     degree: int = 2
     thickness: float = 1.0
     quadrature_degree: int | None = None
+    fbar: bool = False
 
     def __post_init__(self):
         if not all(hasattr(self.mesh, a) for a in ("mesh", "facet_tags", "tags")):
@@ -87,6 +94,22 @@ class Body:
                         what=" (or None: the default of the degree and kind)"))
         if why:
             raise BodyError(why)
+        if self.fbar not in (True, False):
+            raise BodyError(f"fbar = {self.fbar!r}: give True (the volume change averaged over each cell) "
+                            "or False")
+        if self.fbar:
+            self._check_fbar()
+
+    def _check_fbar(self) -> None:
+        """BodyError where F-bar does not apply."""
+        if self.kind == "plane_stress":
+            raise BodyError("fbar = True in plane stress: the thickness takes the volume change, so plane "
+                            "stress does not lock; leave fbar out")
+        simplex = compat.cell_name(self.mesh.mesh) in ("triangle", "tetrahedron")
+        if simplex and self.degree == 1:
+            raise BodyError("fbar = True on P1 triangles or tetrahedra changes nothing (their volume change "
+                            "is one per cell already): use degree=2, which does not lock, or Q1 "
+                            "quadrilaterals or hexahedra with fbar")
 
     @property
     def elastic(self) -> Elastic:

@@ -106,6 +106,8 @@ class StressEvaluation:
         if same if m.comm.size == 1 else m.comm.allreduce(same, op=MPI.LAND):
             return                             # this iterate, from the same converged state
         err = None
+        if m.volume is not None:               # F-bar: the mean dilatation of this iterate first
+            m.volume.refresh(self.generation)
         try:
             m.state.evaluate(m.rule.evaluate(self._expression))
         except (InvertedElement, ReturnMapFailure) as e:

@@ -88,12 +88,12 @@ class Forms:
                 terms = term if terms is None else terms + term
         return R, terms
 
-    def _jacobian(self, m, cof, internal):
-        """The exact Jacobian: the geometric part (sigma held), the material part d sigma = D
-        d sigma_tr, the items' terms (UFL's derivative) and, in plane-stress plasticity, the
-        thickness stretch's part."""
-        u, du, st, up = m.u, m.u_trial, m.state, self.update_terms
-        dsig_tr, dsig_rot = m.update.directional(u, m.u_n, st.sigma_n, du, up)
+    def _material(self, m, direction, wrt=None) -> tuple:
+        """(d sigma, d sigma_tr as a vector, d sigma_rot as a vector or None): the stress's
+        derivative D d sigma_tr in ``direction`` of ``wrt`` (u by default; with F-bar the mean
+        dilatation theta too)."""
+        st, up = m.state, self.update_terms
+        dsig_tr, dsig_rot = m.update.directional(m.u, m.u_n, st.sigma_n, direction, up, wrt)
         dsig_tr = m.kin.vec(dsig_tr)
         dsig = to_tensor(dsig_tr)
         if m.plastic is not None:
@@ -104,6 +104,25 @@ class Forms:
                 st.store_tangent()
                 Dx = ufl.dot(st.D, dsig_tr)
             dsig = to_tensor(Dx)
+        return dsig, dsig_tr, dsig_rot
+
+    def _volume_coupling(self, m, cof) -> None:
+        """F-bar: K_u_theta, the residual's derivative in the mean dilatation (the material part:
+        P = sigma(F_bar) cof F depends on theta through sigma only), and B, compiled into the
+        model's VolumeAverage."""
+        dtheta = m.volume.trial()
+        dsig = self._material(m, dtheta, m.volume.theta)[0]
+        P = dsig * cof if m.update.geometric else dsig
+        m.volume.coupling_forms(ufl.inner(P, m.kin.grad3(m.v)) * m.kin.weight() * m.rule.dx, self._jit)
+
+    def _jacobian(self, m, cof, internal):
+        """The exact Jacobian: the geometric part (sigma held), the material part d sigma = D
+        d sigma_tr, the items' terms (UFL's derivative) and, in plane-stress plasticity, the
+        thickness stretch's part (with F-bar at fixed mean dilatation: the model adds its part)."""
+        u, du, st = m.u, m.u_trial, m.state
+        dsig, dsig_tr, dsig_rot = self._material(m, du)
+        if m.volume is not None:
+            self._volume_coupling(m, cof)
         w, grad_v, dx = m.kin.weight(), m.kin.grad3(m.v), m.rule.dx
         geometric = m.update.geometric
         if geometric:                          # sigma d(cof F): the derivative of a polynomial in F

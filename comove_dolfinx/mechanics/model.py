@@ -40,6 +40,7 @@ from .state import FacetBase, InvertedElement, QuadratureState, ReturnMapFailure
 from .state_io import StateIO
 from .supports import Supports, rigid_motions
 from .updates import make_update
+from .volume import VolumeAverage
 
 __all__ = ["Context", "InvertedElement", "Model", "ReturnMapFailure", "rigid_motions"]
 
@@ -80,6 +81,8 @@ class Model:
         self.v = ufl.TestFunction(self.V)
         self.u_trial = ufl.TrialFunction(self.V)
         self.state = QuadratureState(self.rule, self.plastic, body.kind, body.degree)
+        self.volume = VolumeAverage(self) if body.fbar else None      # F-bar (volume.py)
+        self.update.volume = self.volume
         self.items = list(items)
         self.load = 0.0
         self.supports = Supports(self)
@@ -133,6 +136,15 @@ class Model:
         self.u.x.array[:] = self.u_n.x.array
         for item in self.items:
             item.restore()
+
+    def assemble_jacobian(self, A: PETSc.Mat, bcs=None) -> None:
+        """Zero A and assemble the exact Jacobian at the current iterate (the stress evaluated),
+        with the Dirichlet rows and columns of ``bcs`` (the model's by default); with F-bar its
+        part through the mean dilatation added (volume.py)."""
+        bcs = self.bcs if bcs is None else bcs
+        compat.assemble_matrix(A, self.jacobian_form, bcs)
+        if self.volume is not None:
+            self.volume.add_condensed(A, bcs)
 
     # -- derived quantities -----------------------------------------------------------------------
     def cauchy_stress(self) -> np.ndarray:

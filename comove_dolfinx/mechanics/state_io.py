@@ -60,7 +60,7 @@ class StateIO:
         if u_factorised is not None:
             m.u.x.array[:] = u_factorised
             m.evaluate_stress()
-            compat.assemble_matrix(matrix, m.jacobian_form, m.bcs)
+            m.assemble_jacobian(matrix)
         m.u.x.array[:] = state["u"]
         self._set_point_fields(state, ("sigma", "p", "F22"))
         if "state_new" in state:

@@ -92,11 +92,22 @@ class StressUpdate:
     def __init__(self, kin: Kinematics, elastic):
         self.kin = kin
         self.elastic = elastic
+        self.volume = None        # F-bar: the model's volume.VolumeAverage (set before any build)
 
     def F(self, u):
         """Deformation gradient seen by the update (in plane stress the in-plane block suffices);
         the loads and contact outputs take the current configuration's normals and lengths from it."""
         return self.kin.F3(u, F22=1.0) if self.kin.model == PLANE_STRESS else self.kin.F3(u)
+
+    def stress_F(self, u):
+        """The deformation gradient the stress sees: :meth:`F`, or with F-bar (``volume``) its
+        cell-averaged version (mechanics/volume.py)."""
+        F = self.F(u)
+        return F if self.volume is None else self.volume.modified_F(F, u)
+
+    def dilatation(self, u):
+        """The volume change that F-bar averages: det F."""
+        return ufl.det(self.F(u))
 
     def thickness_stretch(self, u):
         """Plane stress: exact thickness stretch of the hypoelastic law, J_plane^(-l/(l+2m))."""
@@ -109,13 +120,15 @@ class StressUpdate:
     def build(self, u, u_n, state_n) -> UpdateExpr:  # pragma: no cover - interface
         raise NotImplementedError
 
-    def directional(self, u, u_n, state_n, du, up: UpdateExpr) -> tuple:
+    def directional(self, u, u_n, state_n, du, up: UpdateExpr, wrt=None) -> tuple:
         """(d sigma, d sigma_rot): the derivatives of ``up``'s trial stress and rotated old stress
         (``build``'s, at u) in the direction du, 3x3 and linear in du, for the Jacobian's material
         part (docs/theory.md section 5.4); d sigma_rot is None if the update has no rotated stress.
-        UFL's derivative here; an update may give them in closed form."""
-        dsig = ufl.derivative(up.sigma, u, du)
-        drot = ufl.derivative(up.sigma_rot, u, du) if up.sigma_rot is not None else None
+        ``wrt``: the coefficient du is a direction of (u by default; with F-bar also the mean
+        dilatation theta). UFL's derivative here; an update may give them in closed form."""
+        wrt = u if wrt is None else wrt
+        dsig = ufl.derivative(up.sigma, wrt, du)
+        drot = ufl.derivative(up.sigma_rot, wrt, du) if up.sigma_rot is not None else None
         return dsig, drot
 
 
@@ -134,7 +147,7 @@ class SRUpdate(StressUpdate):
         return d_dS
 
     def build(self, u, u_n, state_n):
-        dH = increment_gradient(self.F(u), self.F(u_n))
+        dH = increment_gradient(self.stress_F(u), self.stress_F(u_n))
         if self.kin.solid:                             # a rotation about an axis by an angle
             dS, dR, _ = sr_decomposition(dH)
         else:                                          # the 2D models' rotation: one angle
@@ -143,12 +156,12 @@ class SRUpdate(StressUpdate):
         sig = sig_rot + hooke(self.strain(dS), self.elastic, self.kin.model)
         return UpdateExpr(sig, sig_rot, F22=self.thickness_stretch(u))
 
-    def _directional_3d(self, u, u_n, state_n, du, up):
+    def _directional_3d(self, u, u_n, state_n, du, up, wrt):
         """:meth:`directional` in 3D: the general split's closed-form derivative
         (kinematics.sr_decomposition_direction), d sigma_rot = dR s_n R^T + R s_n dR^T."""
-        F, F_n = self.F(u), self.F(u_n)
+        F, F_n = self.stress_F(u), self.stress_F(u_n)
         H = increment_gradient(F, F_n)
-        G = ufl.derivative(F, u, du) * ufl.inv(F_n)
+        G = ufl.derivative(F, wrt, du) * ufl.inv(F_n)
         S, R, _ = sr_decomposition(H)
         dS, dR = sr_decomposition_direction(H, G)
         s_n = to_tensor(state_n)
@@ -156,15 +169,16 @@ class SRUpdate(StressUpdate):
         drot = a + a.T
         return drot + hooke(self.strain_direction(S, dS), self.elastic, self.kin.model), drot
 
-    def directional(self, u, u_n, state_n, du, up):
+    def directional(self, u, u_n, state_n, du, up, wrt=None):
         """In closed form (docs/theory.md section 3.2): with G = d(dH) = dF F_n^-1, the angle's
         d theta = (G10 - G01) / (2 cos theta), d S = sym G + sin(theta) d theta diag(1, 1, 0) and
         d sigma_rot = d theta (Z sigma_rot - sigma_rot Z), Z the in-plane quarter turn."""
+        wrt = u if wrt is None else wrt
         if self.kin.solid:
-            return self._directional_3d(u, u_n, state_n, du, up)
-        F, F_n = self.F(u), self.F(u_n)
+            return self._directional_3d(u, u_n, state_n, du, up, wrt)
+        F, F_n = self.stress_F(u), self.stress_F(u_n)
         H = increment_gradient(F, F_n)
-        G = ufl.derivative(F, u, du) * ufl.inv(F_n)
+        G = ufl.derivative(F, wrt, du) * ufl.inv(F_n)
         w, c = in_plane_angle(H)
         dtheta = 0.5 * (G[1, 0] - G[0, 1]) / c
         shear = 0.5 * (G[0, 1] + G[1, 0])
@@ -222,7 +236,7 @@ class HughesWingetUpdate(StressUpdate):
     name = "hughes_winget"
 
     def build(self, u, u_n, state_n):
-        dH, _ = _mid_step(self.F(u), self.F(u_n))
+        dH, _ = _mid_step(self.stress_F(u), self.stress_F(u_n))
         dW = ufl.skew(dH)
         Id = ufl.Identity(3)
         dR = ufl.inv(Id - 0.5 * dW) * (Id + 0.5 * dW)
@@ -238,7 +252,7 @@ class PolarUpdate(StressUpdate):
     rotates = False
 
     def build(self, u, u_n, state_n):
-        F, F_n = self.F(u), self.F(u_n)
+        F, F_n = self.stress_F(u), self.stress_F(u_n)
         dH, F_mid = _mid_step(F, F_n)
         polar = polar_rotation_3d if self.kin.solid else polar_rotation_2d
         R_mid = polar(F_mid)
@@ -264,7 +278,7 @@ class SVKUpdate(StressUpdate):
             F22 = ufl.sqrt(1.0 - 2.0 * e.lmbda / (e.lmbda + 2.0 * e.mu) * ufl.tr(E2))
             F = embed(F2, F22)
         else:
-            F = self.kin.F3(u)
+            F = self.stress_F(u)
         E = 0.5 * (F.T * F - ufl.Identity(3))
         S = e.lmbda * ufl.tr(E) * ufl.Identity(3) + 2.0 * e.mu * E
         return UpdateExpr(F * S * F.T / ufl.det(F), F22=F22)
@@ -293,7 +307,7 @@ class NeoHookeUpdate(StressUpdate):
             F22 = ufl.exp(z)
             F = embed(ufl.Identity(2) + ufl.grad(u), F22)
         else:
-            F = self.kin.F3(u)
+            F = self.stress_F(u)
         J = ufl.det(F)
         b = F * F.T
         sig = (e.mu * (b - ufl.Identity(3)) + e.lmbda * ufl.ln(J) * ufl.Identity(3)) / J
@@ -320,14 +334,27 @@ class SmallStrainUpdate(StressUpdate):
         """eps = sym Grad3 u (3x3; zz: u_r / r in axisymmetry, 0 in the plane models)."""
         return ufl.sym(self.kin.grad3(u))
 
+    def stress_strain(self, u):
+        """The strain the stress sees: eps, or with B-bar (``volume``) its cell-averaged version."""
+        eps = self.strain(u)
+        return eps if self.volume is None else self.volume.modified_strain(eps, u)
+
+    def dilatation(self, u):
+        """The volume change that B-bar averages: tr eps."""
+        return ufl.tr(self.strain(u))
+
     def build(self, u, u_n, state_n):
         sig_n = to_tensor(state_n)
-        sig = sig_n + hooke(self.strain(u) - self.strain(u_n), self.elastic, self.kin.model)
+        sig = sig_n + hooke(self.stress_strain(u) - self.stress_strain(u_n), self.elastic, self.kin.model)
         return UpdateExpr(sig, sig_n)
 
-    def directional(self, u, u_n, state_n, du, up):
-        """d sigma_tr = C:eps(du); the old stress does not move (d sigma_rot = 0)."""
-        return hooke(self.strain(du), self.elastic, self.kin.model), ufl.zero(3, 3)
+    def directional(self, u, u_n, state_n, du, up, wrt=None):
+        """d sigma_tr = C:eps(du) (with B-bar: C:d eps_bar); the old stress does not move
+        (d sigma_rot = 0)."""
+        if self.volume is None:
+            return hooke(self.strain(du), self.elastic, self.kin.model), ufl.zero(3, 3)
+        d_eps = ufl.derivative(self.stress_strain(u), u if wrt is None else wrt, du)
+        return hooke(d_eps, self.elastic, self.kin.model), ufl.zero(3, 3)
 
 
 UPDATES = {cls.name: cls for cls in (SRLogUpdate, SRUpdate, HughesWingetUpdate, PolarUpdate, SVKUpdate,

@@ -288,7 +288,7 @@ class Newton(LineSearches):
             if self._converged(rnorm, it - 1):
                 return True, it - 1, "converged"
             with self.timer("jacobian"):
-                compat.assemble_matrix(self.A, m.jacobian_form, m.bcs)
+                m.assemble_jacobian(self.A)
                 if self.iterative:
                     krylov.set_near_nullspace(m.V, self.A, self._u)
             self.u_factorised = self._u.copy()        # a checkpoint rebuilds this tangent

@@ -54,15 +54,19 @@ def mesh(n: int, diagonal: str = "crossed", slab: bool = False, comm=MPI.COMM_WO
     """The half model in n x n squares graded towards the punch's edge (1, 0), a MeshData with the
     facets 'punch' (y = 0, x <= 1), 'top' (the rest of y = 0), 'sym' (x = 0), 'bottom' and
     'right'; with ``slab`` a layer of n x n x 1 cubes of tetrahedra, 2 WIDTH / n thick, whose faces
-    z = const are 'faces'."""
+    z = const are 'faces'. ``diagonal`` "none": the squares (and cubes) themselves, quadrilaterals
+    (hexahedra)."""
     import dolfinx.mesh
 
     from ..geometry import from_dolfinx
     lower, upper = np.array([0.0, -DEPTH]), np.array([WIDTH, 0.0])
     thick = 2.0 * WIDTH / n
+    CellType = dolfinx.mesh.CellType
     if slab:
         msh = dolfinx.mesh.create_box(comm, [np.append(lower, 0.0), np.append(upper, thick)], [n, n, 1],
-                                      dolfinx.mesh.CellType.tetrahedron)
+                                      CellType.hexahedron if diagonal == "none" else CellType.tetrahedron)
+    elif diagonal == "none":
+        msh = dolfinx.mesh.create_rectangle(comm, [lower, upper], [n, n], CellType.quadrilateral)
     else:
         msh = dolfinx.mesh.create_rectangle(comm, [lower, upper], [n, n], dolfinx.mesh.CellType.triangle,
                                             diagonal=getattr(dolfinx.mesh.DiagonalType, diagonal))
@@ -90,12 +94,14 @@ def mesh(n: int, diagonal: str = "crossed", slab: bool = False, comm=MPI.COMM_WO
     return from_dolfinx(msh, tags, {name: tag for tag, name in enumerate(groups, start=1)})
 
 
-def press(n: int, degree: int, diagonal: str = "crossed", slab: bool = False, comm=MPI.COMM_WORLD):
-    """The punch pressed: (settlements, pressures / k, the job's Results, Newton iterations, CPU s)."""
+def press(n: int, degree: int, diagonal: str = "crossed", slab: bool = False, comm=MPI.COMM_WORLD,
+          fbar: bool = False):
+    """The punch pressed: (settlements, pressures / k, the job's Results, Newton iterations, CPU s);
+    ``fbar``: B-bar (the body's option)."""
     import comove_dolfinx as cm
     body = cm.Body(mesh(n, diagonal, slab, comm), "solid" if slab else "plane_strain",
                    cm.J2(1000.0, 0.3, cm.Hardening.perfect(math.sqrt(3.0))), degree=degree,
-                   update="small_strain")
+                   update="small_strain", fbar=fbar)
     items = [cm.Fixed("sym", 0), cm.Fixed("bottom"), cm.Fixed("right", 0),
              cm.Displacement("punch", -SETTLEMENT, component=1)]
     if slab:
