@@ -120,8 +120,11 @@ def _mesh(path: pathlib.Path, mesh) -> None:
 def _body(path: pathlib.Path, body) -> None:
     """[body] and its material: the names known, E and nu and the hardening table usable."""
     where = f"{path}: [body]"
-    _check(where, body, {"kind": str, "update": str, "degree": int, "thickness": float, "material": dict},
-           required=("kind", "material"))
+    _check(where, body, {"kind": str, "update": str, "degree": int, "thickness": float, "fbar": bool,
+                         "material": dict}, required=("kind", "material"))
+    if body.get("fbar") and body["kind"] == "plane_stress":
+        raise ProblemError(f"{where} fbar = true in plane stress: the thickness takes the volume change, so "
+                           "plane stress does not lock; leave fbar out")
     mat = _check(f"{where} material", body["material"], {"law": str, "E": float, "nu": float,
                                                         "hardening": "table"}, required=("E", "nu"))
     law = mat.get("law", "elastic")
@@ -323,7 +326,7 @@ def build(data: dict, comm, writers=()):
     law = m.get("law", "elastic")
     material = as_material(m["E"], m["nu"], None if law == "elastic" else law, hard)
     body = Body(md, b["kind"], material, update=b.get("update", "sr_log"), degree=b.get("degree", 2),
-                thickness=b.get("thickness", 1.0))
+                thickness=b.get("thickness", 1.0), fbar=b.get("fbar", False))
     named = {spec["name"]: _item(spec) for spec in data["items"]}
     steps = [Step(st.get("n", 10), ramp={named[k]: v for k, v in st["ramp"].items()} if "ramp" in st else None,
                   predictor=st.get("predictor", Step.predictor), max_cutbacks=st.get("max_cutbacks", 6),

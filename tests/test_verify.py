@@ -79,9 +79,11 @@ def test_plate3d(tmp_path, comm):
 
 def test_punch(tmp_path, comm):
     """Prandtl's punch on its small meshes: P2 triangles at n = 16 within 2.5 % of (2 + pi) k, the
-    P2 slab at n = 8 within 10 % (tests/test_locking.py checks the convergence)."""
+    P2 slab at n = 8 within 10 %, Q1 quadrilaterals with B-bar at n = 16 within 5 % and the slab of
+    Q1 hexahedra with B-bar at n = 8 within 15 % (tests/test_locking.py and tests/test_fbar.py check
+    the convergence)."""
     checks = _run_small("punch", tmp_path, comm)
-    assert len(checks) == 2
+    assert len(checks) == 4
 
 
 def test_every_registered_case_has_the_protocol():
