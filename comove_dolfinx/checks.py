@@ -19,9 +19,7 @@ import numbers
 
 from .choices import CONVERGENCE_SCALES, LINE_SEARCHES, LINEAR_SOLVERS
 
-#: the most cells a built-in mesh may have: beyond it Gmsh runs out of memory (std::bad_alloc) long
-#: before a run could be solved on one machine
-MAX_CELLS = 5_000_000
+MAX_CELLS = 5_000_000   #: the most cells a built-in mesh may have (beyond it Gmsh runs out of memory)
 
 
 class SettingsError(ValueError):
@@ -224,7 +222,7 @@ def _cells_graded_3d(volume: float, p: dict) -> float:
 
 def _bricks_of_tube(p: dict) -> float:
     """The transfinite bricks of ``tube_sector(..., hexahedra=True)``: around, through, along."""
-    return (math.ceil(p.get("angle", math.pi / 2) * p["r_out"] / p["size"])
+    return (math.ceil(p.get("angle", math.pi / 2) * 0.5 * (p["r_in"] + p["r_out"]) / p["size"])
             * math.ceil((p["r_out"] - p["r_in"]) / p["size"]) * math.ceil(p["length"] / p["size"]))
 
 
@@ -388,15 +386,14 @@ def _parts_error(body, items, steps, probes, writers, newton, load) -> str | Non
 def check_job(body, items, steps, probes, writers, newton, load) -> None:
     """Refuse the parts of a :class:`~comove_dolfinx.job.Job` that cannot be used: ``JobError``
     naming the part and the fix (``items``, ``probes`` and ``writers`` are lists: a single item is
-    refused with the fix "pass [item]"; ``steps`` is a non-empty list, or None for the default), and
-    ``ProbeError`` for a probe of a contact that is not one of the items."""
+    refused with the fix "pass [item]"; ``steps`` is a non-empty list, or None for the default; F-bar
+    takes no Nitsche contact), and ``ProbeError`` for a probe of a contact not among the items."""
     from .job import JobError
     from .probes import check_contacts
-    why = _parts_error(body, items, steps, probes, writers, newton, load)
-    if why is None and getattr(body, "fbar", False) and any(
-            getattr(item, "method", None) == "nitsche" for item in items):
-        why = ("fbar = True with Nitsche contact: Nitsche's facet stress is not averaged; give the "
-               "contact method='penalty' (or leave fbar out)")
+    nitsche = getattr(body, "fbar", False) and any(getattr(i, "method", None) == "nitsche" for i in items)
+    why = _parts_error(body, items, steps, probes, writers, newton, load) or (nitsche and (
+        "fbar = True with Nitsche contact: Nitsche's facet stress is not averaged; give the contact "
+        "method='penalty' (or leave fbar out)")) or None
     if why is not None:
         raise JobError(why)
     check_contacts(probes, items)

@@ -5,7 +5,6 @@ whose volume change is the same everywhere, is left exactly as it was; Q1 elemen
 flat punch's plastic flow, reach Prandtl's limit pressure with it; the same history on two ranks
 and after a restart; and where it does not apply, the body says so in one line."""
 import math
-import shutil
 
 import numpy as np
 import pytest
@@ -18,6 +17,7 @@ from comove_dolfinx.mechanics.model import Model
 from comove_dolfinx.taylor import taylor_test
 from comove_dolfinx.verify import punch
 from states import one_correction_into
+from test_output3d import _bent_block
 
 E, NU = 1000.0, 0.3
 HARDENING = cm.Hardening((0.0, 0.05, 0.2), (15.0, 20.0, 22.0))
@@ -140,22 +140,9 @@ def test_where_fbar_does_not_apply_the_body_says_so(cache):
 
 # -- ranks and restart -------------------------------------------------------------------------------------------
 def _bent(folder, checkpoint=None, stop_after=None, comm=MPI.COMM_WORLD):
-    """A J2 block of Q1 bricks with F-bar held on its left face, its right face moved down and along
-    x at finite strain, in 5 increments."""
-    from comove_dolfinx.io.checkpoint import Checkpoint
-    from comove_dolfinx.io.writers import Writer
-    md = geometry.box(1.0, 0.4, 0.4, 0.1, order=1, comm=comm, cache_dir=str(folder), hexahedra=True)
-    body = cm.Body(md, "solid", cm.J2(E, NU, cm.Hardening.linear(20.0, 50.0)), degree=1, fbar=True)
-    items = [cm.Fixed("left"), cm.Displacement("right", (0.02, -0.08, 0.03))]
-
-    class Stop(Writer):
-        def write(self, run, row, increment):
-            if stop_after is not None and row["increment"] == stop_after:
-                raise RuntimeError("stopped by the test")
-    writers = ([Checkpoint(checkpoint, every=1, interval=0.0)] if checkpoint is not None else []) + [Stop()]
-    probes = [cm.Reaction("left", "clamp", dim=3), cm.NodeDisplacement("tip", (1.0, 0.4, 0.4)),
-              cm.MaxPlasticStrain()]
-    return cm.Job(body, items, [cm.Step(5)], probes, writers=writers)
+    """test_output3d's J2 block, on Q1 bricks with F-bar."""
+    return _bent_block(folder, checkpoint, stop_after, comm, hexahedra=True, size=0.1, order=1, degree=1,
+                       fbar=True)
 
 
 COLUMNS = ("clamp_fx", "clamp_fy", "clamp_fz", "tip_ux", "tip_uy", "tip_uz", "max_plastic_strain")

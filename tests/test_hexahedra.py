@@ -60,7 +60,7 @@ def test_box_of_hexahedra(cache, order):
 
 
 def test_tube_sector_of_hexahedra(cache):
-    """The quarter tube as bricks: the tetrahedral builder's face names, 7 x 2 x 4 cells (around,
+    """The quarter tube as bricks: the tetrahedral builder's face names, 8 x 2 x 4 cells (around,
     through, along), nodes of the curved faces on the true cylinders; the volume's error is that of
     the chords at order 1 (4.1e-3 relative here) and far smaller at order 2 (the 27-node bricks)."""
     from dolfinx import mesh as dmesh
@@ -69,7 +69,7 @@ def test_tube_sector_of_hexahedra(cache):
     for order in (1, 2):
         md = geometry.tube_sector(1.0, 1.5, 1.0, 0.25, order=order, cache_dir=cache, hexahedra=True)
         assert sorted(md.tags) == sorted(TUBE_FACES) and compat.cell_name(md.mesh) == "hexahedron"
-        assert md.mesh.comm.allreduce(md.mesh.topology.index_map(3).size_local, op=MPI.SUM) == 10 * 2 * 4
+        assert md.mesh.comm.allreduce(md.mesh.topology.index_map(3).size_local, op=MPI.SUM) == 8 * 2 * 4
         r = np.hypot(*md.mesh.geometry.x[:, :2].T)
         for name, radius in (("inner", 1.0), ("outer", 1.5)):
             f = md.facet_tags.indices[md.facet_tags.values == md.tags[name]]

@@ -118,14 +118,15 @@ def test_xdmf_of_a_homogeneous_deformation(tmp_path):
 
 
 # -- checkpoint and restart -------------------------------------------------------------------------
-def _bent_block(folder, checkpoint=None, stop_after=None, comm=MPI.COMM_WORLD, hexahedra=False):
-    """A J2 block held on its left face (P2 tetrahedra, or Q2 bricks with ``hexahedra``), its right
-    face moved down and along x at finite strain (sr_log), in 5 increments: plastic flow and a
-    non-uniform state at every quadrature point."""
+def _bent_block(folder, checkpoint=None, stop_after=None, comm=MPI.COMM_WORLD, hexahedra=False, size=0.2,
+                order=2, **body):
+    """A J2 block held on its left face (P2 tetrahedra, or Q2 bricks with ``hexahedra``; ``body``:
+    more of the Body's keywords), its right face moved down and along x at finite strain (sr_log),
+    in 5 increments: plastic flow and a non-uniform state at every quadrature point."""
     from comove_dolfinx.io.checkpoint import Checkpoint
     from comove_dolfinx.io.writers import Writer
-    md = geometry.box(1.0, 0.4, 0.4, 0.2, order=2, comm=comm, cache_dir=str(folder), hexahedra=hexahedra)
-    body = cm.Body(md, "solid", cm.J2(E, NU, cm.Hardening.linear(SIGMA0 * 10, H)), update="sr_log")
+    md = geometry.box(1.0, 0.4, 0.4, size, order=order, comm=comm, cache_dir=str(folder), hexahedra=hexahedra)
+    body = cm.Body(md, "solid", cm.J2(E, NU, cm.Hardening.linear(SIGMA0 * 10, H)), update="sr_log", **body)
     items = [cm.Fixed("left"), cm.Displacement("right", (0.02, -0.08, 0.03))]
 
     class Stop(Writer):

@@ -145,7 +145,7 @@ def plate_section(R: float = 10.0, t: float = 2.0, z_support: float = 0.25, size
 
 def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle: float = math.pi / 2,
                    comm: MPI.Comm = MPI.COMM_WORLD,
-                   cache_dir: str | os.PathLike = "meshes") -> MeshData:
+                   cache_dir: str | os.PathLike = "meshes", quadrilaterals: bool = False) -> MeshData:
     """Structured sector r_in <= r <= r_out, 0 <= theta <= angle of an annulus centred at the origin.
 
     Parameters
@@ -159,6 +159,10 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
         As for `rectangle`; with order 2 the mid-side nodes of the arcs lie on the true circles.
     angle
         Opening angle, 0 < angle < pi (one gmsh arc per circle); pi/2 gives the quarter x, y >= 0.
+    quadrilaterals
+        The grid's cells as quadrilaterals (9-node ones at order 2) instead of triangles: the
+        section of ``tube_sector(..., hexahedra=True)`` at the same size and angle, whose bricks
+        are this grid extruded along z.
 
     Returns
     -------
@@ -172,7 +176,10 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
         raise MeshError(f"r_in must be smaller than r_out, got r_in={r_in!r}, r_out={r_out!r}")
     if not angle < math.pi:
         raise MeshError(f"angle must lie in (0, pi), got {angle!r}")
-    params = dict(r_in=float(r_in), r_out=float(r_out), size=float(size), order=order, angle=float(angle))
+    if not isinstance(quadrilaterals, bool):
+        raise MeshError(f"quadrilaterals must be True or False, got {quadrilaterals!r}")
+    params = dict(r_in=float(r_in), r_out=float(r_out), size=float(size), order=order, angle=float(angle),
+                  **({"quadrilaterals": True} if quadrilaterals else {}))
     _not_too_fine("annulus_sector", params)
     n_r = max(math.ceil((r_out - r_in) / size), 2)
     n_theta = max(math.ceil(angle * 0.5 * (r_in + r_out) / size), 1)
@@ -187,6 +194,8 @@ def annulus_sector(r_in: float, r_out: float, size: float, order: int = 2, angle
         ysym, outer = geo.addLine(a_in, a_out), geo.addCircleArc(a_out, centre, b_out)
         xsym, inner = geo.addLine(b_out, b_in), geo.addCircleArc(b_in, centre, a_in)
         surface = _structured([ysym, outer, xsym, inner], [n_r, n_theta, n_r, n_theta])
+        if quadrilaterals:
+            geo.mesh.setRecombine(2, surface)
         geo.synchronize()
         add_group(2, [surface], BODY_TAG, "body")
         for tag, (name, curve) in enumerate(

@@ -212,9 +212,10 @@ def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: fl
     comm, cache_dir
         As for ``rectangle``.
     hexahedra
-        A transfinite grid of bricks instead: ceil(angle r_out / size) cells around,
+        A transfinite grid of bricks instead: ceil(angle (r_in + r_out) / 2 / size) cells around,
         ceil((r_out - r_in) / size) through the wall and ceil(length / size) along z (order 2:
-        Gmsh's 27-node hexahedra, their nodes on the true cylinders).
+        Gmsh's 27-node hexahedra, their nodes on the true cylinders). Where the wall takes two
+        cells or more, the section is ``annulus_sector(..., quadrilaterals=True)``'s grid.
 
     Returns
     -------
@@ -236,7 +237,7 @@ def tube_sector(r_in: float, r_out: float, length: float, size: float, angle: fl
         _tube_groups(wall[0][1], r_in, r_out, length, angle, 1e-7 * r_out)
         _sizes_near((0.0, r_out, 0.0), size, refine)
         if hexahedra:
-            _bricks(wall[0][1], size, angle * r_out, 1e-7 * r_out)
+            _bricks(wall[0][1], size, angle * 0.5 * (r_in + r_out), 1e-7 * r_out)
 
     return build_cached("tube_sector", params, construct, comm, cache_dir, dim=3)
 
