@@ -70,6 +70,14 @@ class Obstacle:
     def set(self, factor: float) -> None:
         self.d.value = self.displacement(factor)
 
+    # an obstacle whose gap is not a UFL expression (Surface) computes fields for the boundary's
+    # nodes: it is told the nodes and asked to bring its fields up to date before each assembly
+    def on_boundary(self, V, nodes) -> None:
+        """The contact boundary's owned nodes of the displacement's space V (nothing to do here)."""
+
+    def track(self) -> None:
+        """Bring fields computed outside UFL to the current state (nothing to do here)."""
+
     # UFL (current position x; d the obstacle's displacement, default the current one) and NumPy
     # (positions (N, 2), displacement d)
     def gap(self, x, d=None):  # pragma: no cover - interface
