@@ -146,7 +146,7 @@ class Contact(Item):
         self.terms = ContactTerms(self, ctx, self.h, self.history)
         self.history.bind(self.terms, ctx, self.boundary)
         self.outputs = ContactOutputs(self, ctx)
-        self.obstacle.on_boundary(ctx.V, self.outputs.boundary.nodes)
+        self.obstacle.on_boundary(ctx.facets(self.boundary))
         return self.terms.R_c
 
     def nodal(self):

@@ -72,8 +72,8 @@ class Obstacle:
 
     # an obstacle whose gap is not a UFL expression (Surface) computes fields for the boundary's
     # nodes: it is told the nodes and asked to bring its fields up to date before each assembly
-    def on_boundary(self, V, nodes) -> None:
-        """The contact boundary's owned nodes of the displacement's space V (nothing to do here)."""
+    def on_boundary(self, facets) -> None:
+        """The local indices of a contact boundary's facets (nothing to do here)."""
 
     def track(self) -> None:
         """Bring fields computed outside UFL to the current state (nothing to do here)."""

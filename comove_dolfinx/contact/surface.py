@@ -4,7 +4,7 @@ from a surface of a Gmsh geometry (a punch or a die as drawn in CAD).
 A triangulated surface is no UFL expression: its closest point to a boundary point is found in
 NumPy (trimesh.py) and enters the forms as coefficient fields. For each position x = X + w that
 the contact terms ask about (the current one, X + u, and friction's lag state, X + u_lag), the
-obstacle keeps two vector fields of w's space: p, the closest point of the surface to each node of
+obstacle keeps two quadratic vector fields: p, the closest point of the surface to each node of
 the contact boundary, and n, the unit normal there (the signed distance's gradient; trimesh.py).
 Between the nodes they are interpolated, and
 
@@ -28,6 +28,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
+from .. import compat
 from ..checks import number
 from . import trimesh
 from .obstacles import ContactError, Obstacle
@@ -35,8 +36,10 @@ from .tracking import Dependencies, terminals
 
 
 class _Tracked:
-    """The closest-point fields of one position x = X + w (w a displacement Function) against the
-    obstacle moved by ``d`` (a Constant): p and n on w's space, and what they depend on."""
+    """The closest-point fields of one position x = X + w (w a displacement Function, linear or
+    quadratic) against the obstacle moved by ``d`` (a Constant): p and n, quadratic (so that
+    the chord between the nodes of a linear body does not cut the surface's curvature; w is
+    interpolated exactly onto their nodes), and what they depend on."""
 
     def __init__(self, x, d):
         funcs, _ = terminals([x])
@@ -44,21 +47,37 @@ class _Tracked:
             raise ContactError(f"a Surface's position must be X + w for one displacement w; got {len(funcs)} "
                                "functions in it")
         self.x, self.d, self.w = x, d, funcs[0]
-        V = self.w.function_space
-        self.p, self.n = fem.Function(V, name="closest_point"), fem.Function(V, name="surface_normal")
-        self.depends = Dependencies(V.mesh.comm, [x, d])
-        self.X = V.tabulate_dof_coordinates()[:, :3]
+        msh = self.w.function_space.mesh
+        W = compat.function_space(msh, "Lagrange", 2, (3,))
+        self.p, self.n = fem.Function(W, name="closest_point"), fem.Function(W, name="surface_normal")
+        self._w2 = fem.Function(W)
+        self.depends = Dependencies(msh.comm, [x, d])
+        self.X = W.tabulate_dof_coordinates()[:, :3]
+        self._nodes = None
 
-    def update(self, surface, nodes: np.ndarray | None) -> None:
-        """Recompute p and n at ``nodes`` (owned nodes of w's space; None: all owned nodes) if the
-        position or the displacement changed since the last time. Collective."""
+    def nodes(self, facets: np.ndarray | None) -> np.ndarray:
+        """The owned nodes of the fields' space on ``facets`` (local facet indices; None: every
+        owned node)."""
+        if self._nodes is None:
+            W = self.p.function_space
+            owned = W.dofmap.index_map.size_local
+            if facets is None:
+                self._nodes = np.arange(owned)
+            else:
+                dofs = fem.locate_dofs_topological(W.sub(0), W.mesh.topology.dim - 1, facets)
+                nodes = np.unique(dofs // W.dofmap.index_map_bs)
+                self._nodes = nodes[nodes < owned]
+        return self._nodes
+
+    def update(self, surface, facets: np.ndarray | None) -> None:
+        """Recompute p and n at the owned nodes on ``facets`` if the position or the displacement
+        changed since the last time. Collective."""
         if not self.depends.stale():
             return
-        V = self.w.function_space
-        if nodes is None:
-            nodes = np.arange(V.dofmap.index_map.size_local)
+        nodes = self.nodes(facets)
         d = np.asarray(self.d.value, dtype=float)
-        x = self.X[nodes] + self.w.x.array.reshape(-1, 3)[nodes]
+        self._w2.interpolate(self.w)
+        x = self.X[nodes] + self._w2.x.array.reshape(-1, 3)[nodes]
         p, n, _ = surface.closest(x - d)
         for field, values in ((self.p, p + d), (self.n, n)):
             field.x.array.reshape(-1, 3)[nodes] = values
@@ -89,7 +108,7 @@ class Surface(Obstacle):
         if flip:
             self.surface = self.surface.flipped()
         self._tracked: dict = {}
-        self._nodes: dict = {}
+        self._facets = None
 
     @classmethod
     def from_gmsh(cls, path, surface, size: float | None = None, motion=None, flip: bool = False) -> "Surface":
@@ -114,11 +133,13 @@ class Surface(Obstacle):
         return cls(points, triangles, motion, flip)
 
     # -- the fields -----------------------------------------------------------------------------
-    def on_boundary(self, V, nodes: np.ndarray) -> None:
-        """Compute the closest points of these owned nodes of the space V (a contact boundary's;
-        without a call, every node of the space)."""
-        old = self._nodes.get(id(V), (V, np.zeros(0, dtype=np.int64)))[1]
-        self._nodes[id(V)] = (V, np.union1d(old, nodes).astype(np.int64))
+    def on_boundary(self, facets: np.ndarray) -> None:
+        """Compute the closest points on these facets (local indices of a contact boundary's; without
+        a call, at every node)."""
+        old = np.zeros(0, dtype=np.int32) if self._facets is None else self._facets
+        self._facets = np.union1d(old, facets).astype(np.int32)
+        for t in self._tracked.values():
+            t._nodes = None
 
     def _fields(self, x, d) -> _Tracked:
         d = self.d if d is None else d
@@ -131,8 +152,7 @@ class Surface(Obstacle):
         """Bring the closest points of every position asked about to the current state (each only if
         its displacement or the obstacle's changed). Collective."""
         for t in self._tracked.values():
-            V = t.w.function_space
-            t.update(self.surface, self._nodes[id(V)][1] if id(V) in self._nodes else None)
+            t.update(self.surface, self._facets)
 
     # -- the obstacle's interface -------------------------------------------------------------------
     def gap(self, x, d=None):
