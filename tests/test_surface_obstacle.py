@@ -205,3 +205,156 @@ def test_jacobian_across_a_curved_surface_leaves_out_the_normals_turning(cache, 
     result = taylor_test(m, h0=1e-4, n=6)
     assert np.all(np.abs(result.orders[-3:] - 1.0) < 0.1), str(result)
     assert np.all(result.remainders < 0.01 * result.first_order), str(result)
+
+
+# -- two ranks -------------------------------------------------------------------------------------
+@pytest.mark.mpi
+def test_a_surface_on_two_ranks_is_the_serial_one(cache, ball_geo):
+    """The sliding job (friction slipping, Nitsche) on a triangulated sphere, distributed over the
+    ranks and, on every rank, on its own (COMM_SELF): each rank finds the closest points of its own
+    nodes, the same history."""
+    def make():
+        return Surface.from_gmsh(ball_geo, "ball", size=0.1, motion=_motion)
+    par = _slide(cache, make(), "nitsche")
+    ser = _slide(cache, make(), "nitsche", comm=MPI.COMM_SELF)
+    np.testing.assert_array_equal(par.newton_its, ser.newton_its)
+    for col in ("f_fx", "f_fy", "f_fz"):
+        np.testing.assert_allclose(par[col], ser[col], rtol=1e-7, atol=1e-9, err_msg=col)
+
+
+# -- refusals --------------------------------------------------------------------------------------
+def _geo(tmp_path):
+    path = tmp_path / "ball.geo"
+    path.write_text(BALL_GEO)
+    return path
+
+
+REFUSED = [
+    (lambda p: Surface.from_gmsh(p / "none.geo", "ball"),
+     r"surface file .*none.geo: no such file: give the path of a .geo, .brep, .step or .msh file"),
+    (lambda p: Surface.from_gmsh(_geo(p), "bal"),
+     r"surface file .*ball.geo: no physical surface named 'bal': give one of the file's named surfaces \(ball\)"),
+    (lambda p: Surface.from_gmsh(_geo(p), [7]), r"surface tags \[7\]: give tags of the file's surfaces \[1\]"),
+    (lambda p: Surface.from_gmsh(_geo(p), "ball", size=0.0), r"size = 0.0: give the triangles' size, a finite number > 0"),
+    (lambda p: Surface([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 3)]),
+     r"surface triangles of shape \(1, 3\): give \(M, 3\) indices of the points, from 0 to 2"),
+    (lambda p: Surface([(0, 0), (1, 0), (0, 1)], [(0, 1, 2)]), r"surface points of shape \(3, 2\): give \(N, 3\)"),
+    (lambda p: Surface([(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)], [(0, 1, 2), (1, 2, 3)]),
+     r"triangles at the edge between points \[1, 2\] are oriented oppositely: give all the triangles one orientation"),
+    (lambda p: Surface(*grid(1.0, 3), flip=1), r"flip = 1: give True"),
+    (lambda p: Surface(*grid(1.0, 3), motion=(0, 1)), r"motion = \(0, 1\): give 3 finite numbers"),
+]
+
+
+@pytest.mark.parametrize("make, words", REFUSED)
+def test_bad_surfaces_are_refused_in_one_line(tmp_path, make, words):
+    with pytest.raises(ContactError, match=words) as err:
+        make(tmp_path)
+    assert "\n" not in str(err.value)
+
+
+def test_a_surface_is_3d(cache):
+    """A 2D body refuses it in one line naming the 2D obstacles."""
+    md = cm.rectangle(1.0, 0.5, 0.25, order=1, cache_dir=cache)
+    body = cm.Body(md, "plane_strain", cm.Elastic(1000.0, 0.3), degree=1)
+    c = cm.Contact("bottom", Surface(*grid(1.0, 3)))
+    with pytest.raises(ContactError, match="the obstacle Surface is 3D, the body 2D: give a 2D obstacle"):
+        cm.Job(body, [cm.Fixed("top"), c], [cm.Step(1)]).run()
+
+
+# -- a problem file ----------------------------------------------------------------------------------
+BLOCK_ON_BALL = """
+[mesh]
+builder = "box"
+Lx = 1.0
+Ly = 1.0
+Lz = 0.5
+size = 0.25
+order = 1
+[body]
+kind = "solid"
+degree = 1
+material = { E = 1000.0, nu = 0.3 }
+[[items]]
+type = "fixed"
+boundary = "top"
+[[items]]
+type = "contact"
+name = "ball"
+boundary = "bottom"
+method = "nitsche"
+mu = 0.2
+OBSTACLE
+[[steps]]
+n = 2
+[[probes]]
+type = "contact_force"
+item = "ball"
+component = 2
+column = "Pz"
+[[probes]]
+type = "contact_force"
+item = "ball"
+component = 0
+column = "Px"
+[[probes]]
+type = "contact_area"
+item = "ball"
+column = "A"
+"""
+BALL_LINE = 'obstacle = { type = "surface", file = "ball.geo", surface = "ball", size = 0.1, motion = [0.01, 0.0, 0.03] }'
+
+
+def test_a_surface_from_a_problem_file_runs_the_job_of_the_api(tmp_path):
+    """A triangulated ball rising and moving sideways under a block: the file's history (force and
+    contact area) is that of the same job built with the API, the force pushing up and along."""
+    from comove_dolfinx import problem
+    _geo(tmp_path)
+    path = tmp_path / "ball.toml"
+    path.write_text(BLOCK_ON_BALL.replace("OBSTACLE", BALL_LINE))
+    from_file = problem.build(problem.read(path), MPI.COMM_WORLD).run()
+    body = cm.Body(cm.box(1.0, 1.0, 0.5, 0.25, order=1), "solid", cm.Elastic(1000.0, 0.3), degree=1)
+    ball = Surface.from_gmsh(tmp_path / "ball.geo", "ball", size=0.1, motion=(0.01, 0.0, 0.03))
+    c = cm.Contact("bottom", ball, method="nitsche", mu=0.2)
+    probes = [cm.ContactForce(c, "Pz", component=2), cm.ContactForce(c, "Px", component=0), cm.ContactArea(c, "A")]
+    from_api = cm.Job(body, [cm.Fixed("top"), c], [cm.Step(2)], probes=probes, writers=[]).run()
+    assert from_file.completed and from_api.completed
+    for column in ("Px", "Pz", "A"):
+        assert np.array_equal(from_file[column], from_api[column]), column
+    assert from_file["Pz"][-1] > 1.0 and from_file["Px"][-1] > 0.0 and 0.0 < from_file["A"][-1] < 1.0
+
+
+@pytest.mark.parametrize("line, words", [
+    ('obstacle = { type = "surface", file = "ball.geo", size = 0.1 }', "obstacle: surface is missing: add it"),
+    ('obstacle = { type = "surface", file = "ball.geo", surface = "ball", size = -0.1 }',
+     "obstacle: size = -0.1: give the triangles' size, a number > 0"),
+    ('obstacle = { type = "surface", file = "nowhere.geo", surface = "ball" }', "nowhere.geo' does not exist"),
+    ('obstacle = { type = "surface", file = "ball.geo", surface = "ball", flip = 1 }', "flip = 1: give true or false"),
+])
+def test_bad_surfaces_in_a_problem_file_get_one_line(tmp_path, line, words):
+    """Exit code 2 and one line naming the key, dolfinx never imported."""
+    import subprocess
+    import sys
+    _geo(tmp_path)
+    path = tmp_path / "bad.toml"
+    path.write_text(BLOCK_ON_BALL.replace("OBSTACLE", line))
+    code = ("import sys; from comove_dolfinx import cli; rc = cli.main(sys.argv[1:]); "
+            "assert 'dolfinx' not in sys.modules, 'dolfinx was imported'; sys.exit(rc)")
+    p = subprocess.run([sys.executable, "-c", code, "run", str(path), "--out", str(tmp_path / "run")],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+def test_a_missing_surface_name_in_a_problem_file_gets_one_line(tmp_path):
+    """The surface's name is checked when the file's geometry is read: exit code 2, one line."""
+    import subprocess
+    import sys
+    _geo(tmp_path)
+    path = tmp_path / "bad.toml"
+    path.write_text(BLOCK_ON_BALL.replace("OBSTACLE", BALL_LINE.replace('surface = "ball"', 'surface = "face"')))
+    p = subprocess.run([sys.executable, "-m", "comove_dolfinx", "run", str(path), "--out", str(tmp_path / "run")],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert "no physical surface named 'face': give one of the file's named surfaces (ball)" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1, p.stderr
