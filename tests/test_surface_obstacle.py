@@ -222,6 +222,37 @@ def test_a_surface_on_two_ranks_is_the_serial_one(cache, ball_geo):
         np.testing.assert_allclose(par[col], ser[col], rtol=1e-7, atol=1e-9, err_msg=col)
 
 
+# -- a restart -------------------------------------------------------------------------------------
+def test_a_run_on_a_surface_restarts_to_the_uninterrupted_history(cache, ball_geo, tmp_path):
+    """The sliding job on a triangulated sphere (Nitsche, lagged friction slipping), stopped after
+    increment 3 and restarted from its checkpoint: the history and Newton's iterations of the run
+    that was not stopped, to 1e-12 (the closest points are recomputed at the checkpoint's
+    iterates)."""
+    from comove_dolfinx.io.checkpoint import Checkpoint
+    from comove_dolfinx.io.writers import Writer
+
+    class Stop(Writer):
+        def write(self, run, row, increment):
+            if row["increment"] == 4:
+                raise RuntimeError("stopped by the test")
+
+    def job(writers=()):
+        md = cm.box(1.0, 1.0, 0.5, 0.25, order=1, cache_dir=cache)
+        body = cm.Body(md, "solid", cm.Elastic(1000.0, 0.3), degree=1)
+        c = cm.Contact("bottom", Surface.from_gmsh(ball_geo, "ball", size=0.1, motion=_motion), "nitsche", mu=MU)
+        steps = [cm.Step(2, ramp={c: 1.0}), cm.Step(3, ramp={c: 2.0})]
+        return cm.Job(body, [cm.Fixed("top"), c], steps, [cm.ContactForce(c, "f", component=None)],
+                      writers=list(writers))
+    full = job().run()
+    folder = tmp_path / "checkpoint"
+    with pytest.raises(RuntimeError, match="stopped by the test"):
+        job([Checkpoint(folder, every=1, interval=0.0), Stop()]).run()
+    again = job([Checkpoint(folder, every=1, interval=0.0)]).run(restart=folder)
+    assert full.completed and again.completed and again.newton_its == full.newton_its
+    for col in ("f_fx", "f_fy", "f_fz"):
+        np.testing.assert_allclose(again[col], full[col], rtol=0, atol=1e-12 * abs(full["f_fz"]).max(), err_msg=col)
+
+
 # -- refusals --------------------------------------------------------------------------------------
 def _geo(tmp_path):
     path = tmp_path / "ball.geo"

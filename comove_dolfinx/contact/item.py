@@ -161,6 +161,7 @@ class Contact(Item):
 
     def commit(self) -> None:
         """Before the model's own state moves to the new increment (u_n still the old one)."""
+        self.obstacle.track()                  # the stick part below is assembled at the current u
         self.factor_n = self.factor
         self.history.commit(self.u, self.obstacle.displacement(self.factor))
 

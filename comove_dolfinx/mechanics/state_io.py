@@ -60,6 +60,7 @@ class StateIO:
         if u_factorised is not None:
             m.u.x.array[:] = u_factorised
             m.evaluate_stress()
+            m.nodal_loads()          # as before Newton's assembly: the items' fields at this iterate
             compat.assemble_matrix(matrix, m.jacobian_form, m.bcs)
         m.u.x.array[:] = state["u"]
         self._set_point_fields(state, ("sigma", "p", "F22"))
