@@ -225,7 +225,7 @@ def test_a_surface_on_two_ranks_is_the_serial_one(cache, ball_geo):
 # -- a restart -------------------------------------------------------------------------------------
 def test_a_run_on_a_surface_restarts_to_the_uninterrupted_history(cache, ball_geo, tmp_path):
     """The sliding job on a triangulated sphere (Nitsche, lagged friction slipping), stopped after
-    increment 3 and restarted from its checkpoint: the history and Newton's iterations of the run
+    increment 4 and restarted from its checkpoint: the history and Newton's iterations of the run
     that was not stopped, to 1e-12 (the closest points are recomputed at the checkpoint's
     iterates)."""
     from comove_dolfinx.io.checkpoint import Checkpoint
