@@ -6,7 +6,7 @@ NumPy (trimesh.py) and enters the forms as coefficient fields. For each position
 the contact terms ask about (the current one, X + u, and friction's lag state, X + u_lag), the
 obstacle keeps two quadratic vector fields: p, the closest point of the surface to each node of
 the contact boundary, and n, the unit normal there (the signed distance's gradient; trimesh.py).
-Between the nodes they are interpolated, and
+Between the nodes they are interpolated, and::
 
     g = (x - p) . n / |n|,        n_o = n / |n|,
 

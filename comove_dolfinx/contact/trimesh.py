@@ -8,13 +8,14 @@ point p of the surface (the nearest point of the nearest triangle):
 
 * p inside a triangle: the normal n is the triangle's, and the gap g = (x - p) . n is the signed
   distance to the triangle's plane;
-* p on an edge or at a vertex: n = s (x - p) / |x - p|, s = +1 or -1 the side of x, told by the
-  sign of (x - p) . m with m the edge's or vertex's pseudo-normal (the sum of its triangles'
-  normals; at a vertex each weighted by its angle there), so that g = (x - p) . n = s |x - p|.
+* p on an edge or at a vertex: ``n = s (x - p) / |x - p|``, s = +1 or -1 the side of x, told by
+  the sign of ``(x - p) . m`` with m the edge's or vertex's pseudo-normal (the sum of its
+  triangles' normals; at a vertex each weighted by its angle there), so that
+  ``g = (x - p) . n = s |x - p|``.
 
 g is thus the signed distance to the surface, continuous, and n its gradient: a convex edge or
 vertex acts as if rounded with radius 0 (the levels g = c > 0 are rounded about it). At p on an
-edge with x on the surface (|x - p| = 0) n is the edge's pseudo-normal. For a closed surface that
+edge with x on the surface (``|x - p| = 0``) n is the edge's pseudo-normal. For a closed surface that
 does not cross itself the side is exact (the angle-weighted pseudo-normal tells inside from
 outside); an open surface's edges on its border are treated like those of a single triangle.
 
@@ -153,7 +154,7 @@ def _first_minimum(group: np.ndarray, value: np.ndarray, n: int) -> np.ndarray:
 
 def closest_on_triangles(x, a, b, c):
     """The closest point of the triangle (a, b, c) to x, row by row (all (m, 3)): (p, kind, which,
-    |x - p|^2) with kind FACE, EDGE or VERTEX and ``which`` the edge (0: a-b, 1: b-c, 2: c-a) or
+    ``|x - p|^2``) with kind FACE, EDGE or VERTEX and ``which`` the edge (0: a-b, 1: b-c, 2: c-a) or
     vertex (0: a, 1: b, 2: c) it lies on."""
     e1, e2, d = b - a, c - a, x - a
     d11, d12, d22 = (np.einsum("ij,ij->i", u, v) for u, v in ((e1, e1), (e1, e2), (e2, e2)))
