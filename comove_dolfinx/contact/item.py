@@ -16,9 +16,10 @@ Friction (``mu > 0``) has two laws, chosen by ``friction``:
   same Newton loop as everything else (the threshold's derivative is in the Jacobian, which is then
   unsymmetric).
 
-In 3D (a body of kind ``solid`` against a Plane of 3-vectors, a Sphere or a Cylinder) the slip is a
-vector of the obstacle's tangent plane and the friction traction returns to the Coulomb disc
-(terms.py, laws.py); the obstacle's dimension must be the body's.
+In 3D (a body of kind ``solid`` against a Plane of 3-vectors, a Sphere, a Cylinder, an Extruded or
+Revolved profile or a Surface) the slip is a vector of the obstacle's tangent plane and the
+friction traction returns to the Coulomb disc (terms.py, laws.py); the obstacle's dimension must
+be the body's.
 
 The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = min(gamma0,
 10), docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
@@ -30,7 +31,10 @@ normal and tangential laws), ``history`` (history.py: what it carries between in
 state of friction and the penalty's stick part) and ``outputs`` (outputs.py: the force, the contact
 zone, its edges, the pressure profile at the quadrature points, the peak pressure, the largest nodal
 penetration, the lengths that stick and slip, the nodal fields of pressure and shear and, in 3D,
-the contact radius along a meridian), whose results are the item's too.
+the contact radius along a meridian), whose results are the item's too. An obstacle whose gap
+comes from fields computed outside UFL (a Surface's closest points) is brought to the current
+state before each assembly: by ``nodal``, which the model calls before it assembles the residual,
+at each commit and relag pass, and before each result.
 """
 from __future__ import annotations
 

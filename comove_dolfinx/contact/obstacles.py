@@ -1,5 +1,6 @@
 """Rigid obstacles: a plane, a circle (cylinder), a profile with rounded corners in 2D; a plane, a
-sphere and a cylinder in 3D (and a profile extruded or revolved: swept.py); each can move.
+sphere and a cylinder in 3D (and a profile extruded or revolved: swept.py; a triangulated surface:
+surface.py); each can move.
 
 An obstacle gives, for the current position x = X + u of a boundary point, the signed gap g (>= 0 when
 apart, < 0 when penetrating) and the unit normal n_o pointing from the obstacle to the body's side
