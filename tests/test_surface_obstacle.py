@@ -266,6 +266,7 @@ REFUSED = [
     (lambda p: Surface.from_gmsh(_geo(p), "bal"),
      r"surface file .*ball.geo: no physical surface named 'bal': give one of the file's named surfaces \(ball\)"),
     (lambda p: Surface.from_gmsh(_geo(p), [7]), r"surface tags \[7\]: give tags of the file's surfaces \[1\]"),
+    (lambda p: Surface.from_gmsh(_geo(p), 1.5), r"surface = 1.5: give the name of a physical surface or a list"),
     (lambda p: Surface.from_gmsh(_geo(p), "ball", size=0.0), r"size = 0.0: give the triangles' size, a finite number > 0"),
     (lambda p: Surface([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 3)]),
      r"surface triangles of shape \(1, 3\): give \(M, 3\) indices of the points, from 0 to 2"),

@@ -233,8 +233,12 @@ def _surface_tags(gmsh, path, surface, error) -> list[int]:
             raise error(f"surface file {path}: no physical surface named {surface!r}: give one of the "
                         f"file's named surfaces ({', '.join(sorted(groups)) or 'none'})")
         return [int(t) for t in gmsh.model.getEntitiesForPhysicalGroup(2, groups[surface])]
-    tags = [int(t) for t in surface]
     known = {t for _, t in gmsh.model.getEntities(2)}
+    try:
+        tags = [int(t) for t in surface]
+    except (TypeError, ValueError):
+        raise error(f"surface = {surface!r}: give the name of a physical surface or a list of surface tags "
+                    f"(the file's are {sorted(known)})") from None
     if not tags or any(t not in known for t in tags):
         raise error(f"surface file {path}: surface tags {tags}: give tags of the file's surfaces {sorted(known)}")
     return tags
