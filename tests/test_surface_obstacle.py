@@ -11,8 +11,6 @@ flat part, two ranks, a problem file, and the refusals.
 * On a flat part the closest point moves in the plane and the normal is fixed: the Jacobian that
   holds them fixed is exact (Taylor remainders of order 2).
 """
-import tempfile
-
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -267,7 +265,8 @@ REFUSED = [
      r"surface file .*ball.geo: no physical surface named 'bal': give one of the file's named surfaces \(ball\)"),
     (lambda p: Surface.from_gmsh(_geo(p), [7]), r"surface tags \[7\]: give tags of the file's surfaces \[1\]"),
     (lambda p: Surface.from_gmsh(_geo(p), 1.5), r"surface = 1.5: give the name of a physical surface or a list"),
-    (lambda p: Surface.from_gmsh(_geo(p), "ball", size=0.0), r"size = 0.0: give the triangles' size, a finite number > 0"),
+    (lambda p: Surface.from_gmsh(_geo(p), "ball", size=0.0),
+     r"size = 0.0: give the triangles' size, a finite number > 0"),
     (lambda p: Surface([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 3)]),
      r"surface triangles of shape \(1, 3\): give \(M, 3\) indices of the points, from 0 to 2"),
     (lambda p: Surface([(0, 0), (1, 0), (0, 1)], [(0, 1, 2)]), r"surface points of shape \(3, 2\): give \(N, 3\)"),
@@ -334,7 +333,8 @@ type = "contact_area"
 item = "ball"
 column = "A"
 """
-BALL_LINE = 'obstacle = { type = "surface", file = "ball.geo", surface = "ball", size = 0.1, motion = [0.01, 0.0, 0.03] }'
+BALL_LINE = ('obstacle = { type = "surface", file = "ball.geo", surface = "ball", size = 0.1, '
+             'motion = [0.01, 0.0, 0.03] }')
 
 
 def test_a_surface_from_a_problem_file_runs_the_job_of_the_api(tmp_path):
