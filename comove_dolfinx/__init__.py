@@ -54,7 +54,7 @@ _API = {
     "mechanics.materials": ("Elastic", "J2", "Chen", "Hardening", "MaterialError"),
     "loads": ("Fixed", "Displacement", "Pressure", "Traction", "BodyForce", "PointLoad", "ItemError"),
     "contact": ("Contact", "Plane", "Circle", "Profile", "Sphere", "Cylinder", "Extruded", "Revolved",
-                "ContactError"),
+                "Surface", "ContactError"),
     "job": ("Step", "Job", "Results", "JobError"),
     "solver": ("NewtonSettings", "SettingsError"),
     "probes": ("Probe", "NodeDisplacement", "ContactForce", "ContactLength", "ContactEdges", "ContactPeak",

@@ -221,6 +221,8 @@ def _contact(where: str, path: pathlib.Path, item: dict) -> None:
             raise ProblemError(f"{where} obstacle: {key} = [{', '.join('0' for _ in obs[key])}]: give {what}")
     if obs["type"] in ("extruded", "revolved"):
         _swept(f"{where} obstacle", obs)
+    if obs["type"] == "surface" and obs.get("size", 1.0) <= 0:
+        raise ProblemError(f"{where} obstacle: size = {obs['size']!r}: give the triangles' size, a number > 0")
     if "file" in obs:
         obs["file"] = str((path.parent / obs["file"]).resolve())
         if not pathlib.Path(obs["file"]).is_file():
@@ -356,7 +358,8 @@ def _item(spec: dict):
         o["profile"] = (c.Profile(source["points"], source["radius"]) if "points" in source
                         else c.Profile.from_gmsh(**source))
     obstacle = {"plane": c.Plane, "circle": c.Circle, "profile": c.Profile, "gmsh_profile": c.Profile.from_gmsh,
-                "sphere": c.Sphere, "cylinder": c.Cylinder, "extruded": c.Extruded, "revolved": c.Revolved}[otype](**o)
+                "sphere": c.Sphere, "cylinder": c.Cylinder, "extruded": c.Extruded, "revolved": c.Revolved,
+                "surface": c.Surface.from_gmsh}[otype](**o)
     return c.Contact(s.pop("boundary"), obstacle, **s)
 
 

@@ -41,13 +41,16 @@ OBSTACLES = {"plane": {"point": "vector", "normal": "vector", "motion": "vector"
              "sphere": {"centre": "vector", "radius": float, "motion": "vector"},
              "cylinder": {"point": "vector", "axis": "vector", "radius": float, "motion": "vector"},
              "extruded": {**_SWEPT, "u": "vector", "v": "vector", "origin": "vector", "motion": "vector"},
-             "revolved": {**_SWEPT, "axis": "vector", "origin": "vector", "motion": "vector"}}
+             "revolved": {**_SWEPT, "axis": "vector", "origin": "vector", "motion": "vector"},
+             "surface": {"file": str, "surface": str, "size": float, "flip": bool, "motion": "vector"}}
 #: the keys an obstacle must have (extruded and revolved: points, or file and curve, besides)
 OBSTACLE_REQUIRED = {"plane": ("point", "normal"), "circle": ("centre", "radius"), "profile": ("points", "radius"),
                      "gmsh_profile": ("file", "curve", "radius"), "sphere": ("centre", "radius"),
-                     "cylinder": ("point", "axis", "radius"), "extruded": ("radius",), "revolved": ("radius",)}
+                     "cylinder": ("point", "axis", "radius"), "extruded": ("radius",), "revolved": ("radius",),
+                     "surface": ("file", "surface")}
 #: the obstacles of 2D bodies and of 3D ones (plane: both)
-OBSTACLES_2D, OBSTACLES_3D = ("circle", "profile", "gmsh_profile"), ("sphere", "cylinder", "extruded", "revolved")
+OBSTACLES_2D, OBSTACLES_3D = ("circle", "profile", "gmsh_profile"), ("sphere", "cylinder", "extruded", "revolved",
+                                                                               "surface")
 PROBES = {"node": {"name": str, "point": "vector", "component": int, "column": str},
           "contact_force": {"item": str, "column": str, "component": int, "scale": float},
           "contact_length": {"item": str, "column": str, "scale": float},
@@ -79,7 +82,7 @@ RANGES = {
     "n": lambda k, v: number(k, v, ge=1, le=1_000_000, whole=True, what=" of increments"),
     "predictor": lambda k, v: choice(k, v, tuple(PREDICTORS)),
     "max_cutbacks": lambda k, v: number(k, v, ge=0, le=30, whole=True),
-    **{k: (lambda k, v: text(k, v)) for k in ("name", "boundary", "column", "item", "curve", "file")},
+    **{k: (lambda k, v: text(k, v)) for k in ("name", "boundary", "column", "item", "curve", "file", "surface")},
 }
 WANT = {float: "a finite number", int: "a whole number", str: "a string", bool: "true or false", dict: "a table",
         list: "a list of item names", "vector": "finite numbers [x, y] ([x, y, z] in 3D)", "points": "a list of [x, y] points",

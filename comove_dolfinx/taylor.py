@@ -47,7 +47,7 @@ class TaylorResult:
 
 def _residual(model, out: PETSc.Vec) -> None:
     model.evaluate_stress()
-    compat.assemble_vector(out, model.residual_form)
+    compat.assemble_vector(out, model.residual_form, add=model.nodal_loads())   # as Newton does
 
 
 def random_direction(model, seed: int = 0, scale: float | None = None) -> fem.Function:

@@ -103,17 +103,22 @@ class ContactHistory:
         if self.base is not None:              # a relag pass may have moved it
             self.base.set_arrays(self._base_kept)
 
-    def relag(self, u, d, comm) -> float:
+    def relag(self, u, d, comm, track=None) -> float:
         """Make the current solution (the body at ``u``, the obstacle at ``d``) the lag state;
         returns how much the lag state's pressure changed, relative to its largest value (all
-        ranks)."""
+        ranks). ``track``: called whenever the lag state moved, before the pressure is assembled
+        (the obstacle's Obstacle.track)."""
         if self._p_lag_form is None:
             self._p_lag_form = fem.form(self._p_lag)
+        if track is not None:
+            track()
         p_old = self._assemble(self._p_lag_form, "p")
         self.u_lag.x.array[:] = u.x.array
         self.d_lag.value = d
         if self.base is not None:              # this pass was solved from the current state
             self.base.capture()
+        if track is not None:
+            track()
         p_new = self._assemble(self._p_lag_form, "p")
         scale = max(np.abs(p_new).max(), 1e-300)
         return comm.allreduce(float(np.abs(p_new - p_old).max()) / scale, op=MPI.MAX)

@@ -16,9 +16,10 @@ Friction (``mu > 0``) has two laws, chosen by ``friction``:
   same Newton loop as everything else (the threshold's derivative is in the Jacobian, which is then
   unsymmetric).
 
-In 3D (a body of kind ``solid`` against a Plane of 3-vectors, a Sphere or a Cylinder) the slip is a
-vector of the obstacle's tangent plane and the friction traction returns to the Coulomb disc
-(terms.py, laws.py); the obstacle's dimension must be the body's.
+In 3D (a body of kind ``solid`` against a Plane of 3-vectors, a Sphere, a Cylinder, an Extruded or
+Revolved profile or a Surface) the slip is a vector of the obstacle's tangent plane and the
+friction traction returns to the Coulomb disc (terms.py, laws.py); the obstacle's dimension must
+be the body's.
 
 The tangential term has its own weight gamma_t = gamma0_t E / h (by default gamma0_t = min(gamma0,
 10), docs/theory.md section 6.3). The penalty friction keeps its stick part e_n (a length: the elastic
@@ -30,9 +31,14 @@ normal and tangential laws), ``history`` (history.py: what it carries between in
 state of friction and the penalty's stick part) and ``outputs`` (outputs.py: the force, the contact
 zone, its edges, the pressure profile at the quadrature points, the peak pressure, the largest nodal
 penetration, the lengths that stick and slip, the nodal fields of pressure and shear and, in 3D,
-the contact radius along a meridian), whose results are the item's too.
+the contact radius along a meridian), whose results are the item's too. An obstacle whose gap
+comes from fields computed outside UFL (a Surface's closest points) is brought to the current
+state before each assembly: by ``nodal``, which the model calls before it assembles the residual,
+at each commit and relag pass, and before each result.
 """
 from __future__ import annotations
+
+import operator
 
 import numpy as np
 from mpi4py import MPI
@@ -48,6 +54,17 @@ from .outputs import ContactOutputs, ZoneInfo
 from .terms import FACET_DEGREE, ContactTerms, cell_sizes
 
 __all__ = ["FACET_DEGREE", "Contact", "ZoneInfo"]
+
+
+def tracked(path: str) -> property:
+    """Like ``delegate(path)`` (an output of the item's parts), after the obstacle's fields computed
+    outside UFL are brought to the current state (Obstacle.track; collective, as every output)."""
+    getter = operator.attrgetter(path)
+
+    def get(self):
+        self.obstacle.track()
+        return getter(self)
+    return property(get, doc=f"``{path}`` (``self.{path}``), which documents it, at the current state.")
 
 
 class Contact(Item):
@@ -97,7 +114,7 @@ class Contact(Item):
             raise ContactError(why)
         if not isinstance(obstacle, Obstacle):
             raise ContactError(f"obstacle = {obstacle!r}: give a Plane, Circle or Profile (2D), or a "
-                               "Plane, Sphere, Cylinder, Extruded or Revolved (3D)")
+                               "Plane, Sphere, Cylinder, Extruded, Revolved or Surface (3D)")
         if friction not in FRICTION_LAWS:
             raise ContactError(f"friction = {friction!r} is unknown: choose coulomb (the current pressure) "
                                "or lagged (the last increment's)")
@@ -120,7 +137,7 @@ class Contact(Item):
         parts."""
         dim, obs = ctx.mesh.topology.dim, self.obstacle
         if obs.dim != dim:
-            fix = ("give a 3D obstacle: Plane with 3-vectors, Sphere, Cylinder, Extruded or Revolved"
+            fix = ("give a 3D obstacle: Plane with 3-vectors, Sphere, Cylinder, Extruded, Revolved or Surface"
                    if dim == 3 else "give a 2D obstacle: Plane with 2-vectors, Circle or Profile")
             raise ContactError(f"contact on {self.boundary!r}: the obstacle {type(obs).__name__} is {obs.dim}D, "
                                f"the body {dim}D: {fix}")
@@ -133,13 +150,22 @@ class Contact(Item):
         self.terms = ContactTerms(self, ctx, self.h, self.history)
         self.history.bind(self.terms, ctx, self.boundary)
         self.outputs = ContactOutputs(self, ctx)
+        self.obstacle.on_boundary(ctx.facets(self.boundary))
         return self.terms.R_c
+
+    def nodal(self):
+        """No nodal forces. The model asks every item for them before each assembly of its residual:
+        then an obstacle with fields computed outside UFL (a Surface's closest points) brings them
+        to the current iterate and load factor. Collective."""
+        self.obstacle.track()
+        return None
 
     def _apply(self, factor):
         self.obstacle.set(factor)
 
     def commit(self) -> None:
         """Before the model's own state moves to the new increment (u_n still the old one)."""
+        self.obstacle.track()                  # the stick part below is assembled at the current u
         self.factor_n = self.factor
         self.history.commit(self.u, self.obstacle.displacement(self.factor))
 
@@ -162,7 +188,8 @@ class Contact(Item):
         changed notably."""
         if not (self.relag and self.mu > 0 and self.friction == "lagged"):
             return False
-        change = self.history.relag(self.u, self.obstacle.displacement(self.factor), self.comm)
+        change = self.history.relag(self.u, self.obstacle.displacement(self.factor), self.comm,
+                                    self.obstacle.track)
         return change > self.relag_tol
 
     def check_start(self) -> None:
@@ -180,16 +207,16 @@ class Contact(Item):
                      "displacement's blocked dofs).")
     node_sdof = delegate("outputs.fields.node_sdof", "The dof of the boundary fields (``pressure``, "
                          "``shear``) at each of ``nodes`` (-1: none).")
-    force = delegate("outputs.force")
-    lag_force = delegate("outputs.lag_force")
-    pressure = delegate("outputs.pressure")
-    shear = delegate("outputs.shear")
-    update_fields = delegate("outputs.update_fields")
-    boundary_values = delegate("outputs.boundary_values")
-    profile = delegate("outputs.profile")
-    peak_pressure = delegate("outputs.peak_pressure")
-    stick_slip = delegate("outputs.stick_slip")
-    zone_edges = delegate("outputs.zone_edges")
-    zone = delegate("outputs.zone")
-    meridian = delegate("outputs.meridians.meridian")
-    radius = delegate("outputs.meridians.radius")
+    force = tracked("outputs.force")
+    lag_force = tracked("outputs.lag_force")
+    pressure = tracked("outputs.pressure")
+    shear = tracked("outputs.shear")
+    update_fields = tracked("outputs.update_fields")
+    boundary_values = tracked("outputs.boundary_values")
+    profile = tracked("outputs.profile")
+    peak_pressure = tracked("outputs.peak_pressure")
+    stick_slip = tracked("outputs.stick_slip")
+    zone_edges = tracked("outputs.zone_edges")
+    zone = tracked("outputs.zone")
+    meridian = tracked("outputs.meridians.meridian")
+    radius = tracked("outputs.meridians.radius")

@@ -1,5 +1,6 @@
 """Rigid obstacles: a plane, a circle (cylinder), a profile with rounded corners in 2D; a plane, a
-sphere and a cylinder in 3D (and a profile extruded or revolved: swept.py); each can move.
+sphere and a cylinder in 3D (and a profile extruded or revolved: swept.py; a triangulated surface:
+surface.py); each can move.
 
 An obstacle gives, for the current position x = X + u of a boundary point, the signed gap g (>= 0 when
 apart, < 0 when penetrating) and the unit normal n_o pointing from the obstacle to the body's side
@@ -69,6 +70,14 @@ class Obstacle:
 
     def set(self, factor: float) -> None:
         self.d.value = self.displacement(factor)
+
+    # an obstacle whose gap is not a UFL expression (Surface) computes fields for the boundary's
+    # nodes: it is told the nodes and asked to bring its fields up to date before each assembly
+    def on_boundary(self, facets) -> None:
+        """The local indices of a contact boundary's facets (nothing to do here)."""
+
+    def track(self) -> None:
+        """Bring fields computed outside UFL to the current state (nothing to do here)."""
 
     # UFL (current position x; d the obstacle's displacement, default the current one) and NumPy
     # (positions (N, 2), displacement d)

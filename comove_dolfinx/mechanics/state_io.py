@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import compat
 
 _POINT_FIELDS = ("sigma", "sigma_n", "p", "p_n", "F22", "F22_n")
 
@@ -60,6 +59,7 @@ class StateIO:
         if u_factorised is not None:
             m.u.x.array[:] = u_factorised
             m.evaluate_stress()
+            m.nodal_loads()          # as before Newton's assembly: the items' fields at this iterate
             m.assemble_jacobian(matrix)
         m.u.x.array[:] = state["u"]
         self._set_point_fields(state, ("sigma", "p", "F22"))
