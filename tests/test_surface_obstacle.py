@@ -221,11 +221,12 @@ def test_a_surface_on_two_ranks_is_the_serial_one(cache, ball_geo):
 
 
 # -- a restart -------------------------------------------------------------------------------------
-def test_a_run_on_a_surface_restarts_to_the_uninterrupted_history(cache, ball_geo, tmp_path):
-    """The sliding job on a triangulated sphere (Nitsche, lagged friction slipping), stopped after
-    increment 4 and restarted from its checkpoint: the history and Newton's iterations of the run
-    that was not stopped, to 1e-12 (the closest points are recomputed at the checkpoint's
-    iterates)."""
+@pytest.mark.parametrize("method", ["nitsche", "penalty"])
+def test_a_run_on_a_surface_restarts_to_the_uninterrupted_history(cache, ball_geo, tmp_path, method):
+    """The sliding job on a triangulated sphere (lagged friction slipping; with penalty its stick
+    part, a vector field of the contact's nodes, is in the checkpoint too), stopped after increment
+    4 and restarted from its checkpoint: the history and Newton's iterations of the run that was not
+    stopped, to 1e-12 (the closest points are recomputed at the checkpoint's iterates)."""
     from comove_dolfinx.io.checkpoint import Checkpoint
     from comove_dolfinx.io.writers import Writer
 
@@ -237,7 +238,7 @@ def test_a_run_on_a_surface_restarts_to_the_uninterrupted_history(cache, ball_ge
     def job(writers=()):
         md = cm.box(1.0, 1.0, 0.5, 0.25, order=1, cache_dir=cache)
         body = cm.Body(md, "solid", cm.Elastic(1000.0, 0.3), degree=1)
-        c = cm.Contact("bottom", Surface.from_gmsh(ball_geo, "ball", size=0.1, motion=_motion), "nitsche", mu=MU)
+        c = cm.Contact("bottom", Surface.from_gmsh(ball_geo, "ball", size=0.1, motion=_motion), method, mu=MU)
         steps = [cm.Step(2, ramp={c: 1.0}), cm.Step(3, ramp={c: 2.0})]
         return cm.Job(body, [cm.Fixed("top"), c], steps, [cm.ContactForce(c, "f", component=None)],
                       writers=list(writers))

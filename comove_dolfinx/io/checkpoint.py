@@ -46,8 +46,8 @@ def _owned(model, kind, arr, X=None):
         tdim = model.mesh.topology.dim
         n = model.mesh.topology.index_map(tdim).size_local * model.rule.points.shape[0]
         return X[:n], np.asarray(arr)[:n]
-    n = kind.dofmap.index_map.size_local                        # a scalar space of an item
-    return X[:n], np.asarray(arr)[:n]
+    n = kind.dofmap.index_map.size_local                        # a space of an item's field
+    return X[:n], np.asarray(arr).reshape(-1, kind.dofmap.index_map_bs)[:n]
 
 
 def _local_coordinates(model, kind):
@@ -136,7 +136,7 @@ class Checkpoint(Writer):
         def put(name, value):
             if isinstance(value, tuple):              # (kind, local array): owned entries, keyed by position
                 kind, arr = value
-                tag = kind if isinstance(kind, str) else "S"
+                tag = kind if isinstance(kind, str) else name      # an item's field: keyed by its own nodes
                 key = tag if isinstance(kind, str) else id(kind)
                 if key not in coords:
                     coords[key] = _local_coordinates(m, kind)
@@ -293,10 +293,10 @@ def restore(meta: dict, parts: list, model, newton) -> dict:
     run that wrote it); the increment loop's resume dict."""
     kinds = meta["kinds"]
     spaces = {"V": "V", "Q": "Q"}
-    for i, item in enumerate(model.items):          # the scalar spaces of the items' fields
+    for i, item in enumerate(model.items):          # the spaces of the items' fields
         for k, v in item.save_state().items():
             if isinstance(v, tuple) and not isinstance(v[0], str):
-                spaces["S"] = v[0]
+                spaces[f"item{i}_{k}"] = spaces["S"] = v[0]     # ("S": older checkpoints' one tag)
     index = {}
 
     def local(name):
@@ -311,7 +311,7 @@ def restore(meta: dict, parts: list, model, newton) -> dict:
             except KeyError:
                 raise CheckpointError("the checkpoint does not fit this mesh: restart the same problem") from None
         vals = np.concatenate([p[name] for p in parts])[index[tag]]
-        return vals.ravel() if tag in ("V", "S") else vals
+        return vals if tag == "Q" else vals.ravel()
 
     names = parts[0].keys()
     mstate = {k[6:]: local(k) for k in names if k.startswith("model_")}
