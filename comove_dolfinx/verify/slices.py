@@ -132,21 +132,25 @@ def run(out: pathlib.Path, small: bool = False) -> list[Check]:
                             f"relative difference of the 3D force over {len(c['rel'])} increments, "
                             f"delta > {DELTA_FROM}", 0.0,
                             worst, tol, c["its"], c["cpu"]))
-    _plot(out, {"plane strain, tetrahedra": strain, "plane strain, Q2 bricks": bricks, "plane stress": stress}, comm)
+    _plot(out, [(strain, "plane strain", "P2 triangles", "P2 tetrahedra"),
+                (bricks, "plane strain", "Q2 quadrilaterals", "Q2 bricks"),
+                (stress, "plane stress", "P2 triangles", "P2 tetrahedra")], comm)
     return checks
 
 
-def _plot(out, runs: dict, comm) -> None:
-    """Left: the force of each 2D run and its slice; right: their relative differences."""
+def _plot(out, runs: list, comm) -> None:
+    """Left: the force of each 2D run and its slice; right: their relative differences (``runs``:
+    (comparison, model, 2D elements, 3D elements))."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (ax, dx) = plt.subplots(1, 2, figsize=(10.5, 4.2))
-    for k, (label, c) in enumerate(runs.items()):
+    for k, (c, model, cells2, cells3) in enumerate(runs):
         color = f"C{k}"
-        ax.plot(c["d2"], c["P2"], "-", color=color, lw=1.2, label=f"2D, {label}")
-        ax.plot(c["d3"], c["P3"], "o", color=color, ms=3.5, mfc="none", label=f"3D slice, {label}")
-        dx.plot(c["d_rel"], 100.0 * np.asarray(c["rel"]), "o-", color=color, ms=3, lw=0.8, label=label)
+        ax.plot(c["d2"], c["P2"], "-", color=color, lw=1.2, label=f"2D {model}, {cells2}")
+        ax.plot(c["d3"], c["P3"], "o", color=color, ms=3.5, mfc="none", label=f"3D slice, {cells3}")
+        dx.plot(c["d_rel"], 100.0 * np.asarray(c["rel"]), "o-", color=color, ms=3, lw=0.8,
+                label=f"{model}: {cells3} / {cells2}")
     ax.set_xlabel("approach of the plates delta [cm]")
     ax.set_ylabel("force per unit length P [kgf/cm]")
     ax.legend(fontsize=7, loc="lower right")
