@@ -107,13 +107,13 @@ class VolumeAverage:
         self._average(self._forms[0], self.theta)
 
     # -- the Jacobian's condensed part ----------------------------------------------------------
-    def coupling_forms(self, d_residual_d_theta, jit_options=None) -> None:
+    def coupling_forms(self, d_residual_d_theta, jit=None) -> None:
         """Compile K_u_theta (``d_residual_d_theta``: the residual's derivative in a DG0 trial
         function, a bilinear form on (V, Q)) and B = int q dJ[du] w dX."""
         m = self.model
         q, w, dx = ufl.TestFunction(self.Q), m.kin.weight(), m.rule.dx
         B = ufl.derivative(m.update.dilatation(m.u) * q * w * dx, m.u, m.u_trial)
-        self._coupling = (compat.form(d_residual_d_theta, jit_options), compat.form(B, jit_options))
+        self._coupling = (compat.form(d_residual_d_theta, jit), compat.form(B, jit))
 
     def trial(self):
         """The DG0 trial function of K_u_theta."""
