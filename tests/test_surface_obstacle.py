@@ -20,6 +20,7 @@ from comove_dolfinx.contact import ContactError, Plane, Sphere, Surface
 from comove_dolfinx.contact import trimesh
 from comove_dolfinx.taylor import taylor_test
 from states import pressed_block
+from test_swept import MU, _motion, _slide
 
 R_BALL = 1.0
 BALL_GEO = f"""SetFactory("OpenCASCADE");
@@ -98,23 +99,7 @@ def test_a_triangulated_sphere_lies_between_its_spheres_and_flips(ball_geo):
 
 
 # -- the same as Plane -----------------------------------------------------------------------------
-MU, DEPTH, DRAG = 0.3, 0.01, (0.03, 0.04)
-
-
-def _motion(f):
-    return DRAG[0] * max(f - 1.0, 0.0), DRAG[1] * max(f - 1.0, 0.0), DEPTH * min(f, 1.0)
-
-
-def _slide(cache, obstacle, method="penalty", comm=MPI.COMM_WORLD):
-    """A block (1 x 1 x 0.5, its top held) on an obstacle that rises by DEPTH in 2 increments,
-    then slides by DRAG (x, y) in 3; the history of the obstacle's force on the block."""
-    md = cm.box(1.0, 1.0, 0.5, 0.25, order=1, comm=comm, cache_dir=cache)
-    body = cm.Body(md, "solid", cm.Elastic(1000.0, 0.3), degree=1)
-    c = cm.Contact("bottom", obstacle, method=method, mu=MU)
-    steps = [cm.Step(2, ramp={c: 1.0}), cm.Step(3, ramp={c: 2.0})]
-    res = cm.Job(body, [cm.Fixed("top"), c], steps, [cm.ContactForce(c, "f", component=None)]).run()
-    assert res.completed, res.message
-    return res
+# the block sliding on an obstacle, as test_swept runs it against Plane and Sphere
 
 
 def test_a_triangulated_plane_is_the_plane(cache):

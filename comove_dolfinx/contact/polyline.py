@@ -82,13 +82,7 @@ def read_gmsh(path, curve, spacing: float, error) -> np.ndarray:
     along its length and joined end to end; unusable input raises ``error`` (the exception type)
     in one line. Gmsh is started and finalised here."""
     from ..geometry import gmsh_session
-    gmsh = gmsh_session.gmsh
-    gmsh_session.start()
-    try:
-        try:
-            gmsh.open(str(path))
-        except Exception as err:                  # noqa: BLE001 - gmsh raises plain Exception
-            raise error(f"profile file {path}: gmsh cannot read it ({err})") from None
+    with gmsh_session.opened(path, "profile", error) as gmsh:
         if isinstance(curve, str):
             groups = {gmsh.model.getPhysicalName(1, t): t for _, t in gmsh.model.getPhysicalGroups(1)}
             if curve not in groups:
@@ -107,8 +101,6 @@ def read_gmsh(path, curve, spacing: float, error) -> np.ndarray:
             length = float(np.linalg.norm(np.diff(fine, axis=0), axis=1).sum())
             n = max(int(math.ceil(length / spacing)), 1)
             pieces.append(np.reshape(gmsh.model.getValue(1, tag, np.linspace(lo, hi, n + 1)), (-1, 3))[:, :2])
-    finally:
-        gmsh_session.stop()
     return chain(pieces, path, error)
 
 

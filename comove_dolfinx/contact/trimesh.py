@@ -191,13 +191,7 @@ def read_gmsh(path, surface, size, error) -> tuple[np.ndarray, np.ndarray]:
     orients that surface. Unusable input raises ``error`` (the exception type) in one line. Gmsh is
     started and finalised here."""
     from ..geometry import gmsh_session
-    gmsh = gmsh_session.gmsh
-    gmsh_session.start()
-    try:
-        try:
-            gmsh.open(str(path))
-        except Exception as err:                  # noqa: BLE001 - gmsh raises plain Exception
-            raise error(f"surface file {path}: gmsh cannot read it ({err})") from None
+    with gmsh_session.opened(path, "surface", error) as gmsh:
         tags = _surface_tags(gmsh, path, surface, error)
         if not str(path).lower().endswith(".msh"):
             if size is not None:
@@ -215,8 +209,6 @@ def read_gmsh(path, surface, size, error) -> tuple[np.ndarray, np.ndarray]:
                     raise error(f"surface file {path}: surface {tag} has elements of Gmsh type {kind}: "
                                 "give a surface meshed into 3-node triangles")
                 triangles.append(index[np.asarray(conn, dtype=np.int64).reshape(-1, 3)])
-    finally:
-        gmsh_session.stop()
     if not triangles:
         raise error(f"surface file {path}: the surfaces {surface!r} have no triangles: mesh them (or give a "
                     "geometry file, which is meshed here)")

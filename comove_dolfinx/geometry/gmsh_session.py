@@ -97,3 +97,19 @@ def stop() -> None:
     """Finalize gmsh."""
     with _sigint_kept():
         _module().finalize()
+
+
+@contextlib.contextmanager
+def opened(path, what: str, error):
+    """Gmsh started with the user's file ``path`` open, and finalised after the block; a file that
+    Gmsh cannot read raises ``error`` (the caller's exception type) in one line that names it as
+    the ``what`` file."""
+    start()
+    try:
+        try:
+            gmsh.open(str(path))
+        except Exception as err:                  # noqa: BLE001 - gmsh raises plain Exception
+            raise error(f"{what} file {path}: gmsh cannot read it ({err})") from None
+        yield gmsh
+    finally:
+        stop()
