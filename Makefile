@@ -28,12 +28,12 @@ ifeq ($(filter apt pip,$(SOURCE)),)
 $(error DOLFINX=$(DOLFINX): use apt, pip or auto)
 endif
 
-APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-pytest python3-pytest-xdist \
+APT_PKGS := python3-dolfinx-real python3-gmsh python3-matplotlib python3-scipy python3-pytest python3-pytest-xdist \
             python3-venv python3-pip python3-setuptools python3-wheel python3-tqdm python3-meshio \
             python3-h5py openmpi-bin libopenblas0 paraview python3-paraview xvfb xauth
 # the pip path compiles forms with the system's C compiler; PyPI's gmsh needs a few X/GL libraries
 PIP_APT_PKGS := gcc libc6-dev libglu1-mesa libxcursor1 libxft2 libxinerama1
-PIP_PKGS := "dolfinx-solver-real==0.11.*" gmsh matplotlib tqdm pytest pytest-xdist meshio h5py
+PIP_PKGS := "dolfinx-solver-real==0.11.*" gmsh matplotlib scipy tqdm pytest pytest-xdist meshio h5py
 # the first Python >= 3.12 among python3.13, python3.12, pyenv's versions and python3
 PIP_PYTHON ?= $(shell for p in python3.13 python3.12 \
     $$(ls -d $${PYENV_ROOT:-$$HOME/.pyenv}/versions/3.1[2-9]*/bin/python3 2>/dev/null | sort -rV) python3; do \
