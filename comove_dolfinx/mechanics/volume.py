@@ -89,8 +89,7 @@ class VolumeAverage:
         self._forms = (compat.form(dil * q * w * dx), compat.form(dil_n * q * w * dx))
 
     def _average(self, form, f) -> None:
-        if self._forms is None:
-            self._build_forms()
+        """f = M^-1 (the assembled ``form``): the cell means (ghost cells too)."""
         vec = compat.petsc_vec(f)
         compat.assemble_vector(vec, form)
         vec.pointwiseMult(vec, self._minv)
@@ -131,9 +130,3 @@ class VolumeAverage:
         B.diagonalScale(L=self._minv)
         self._matrices[2] = C = K.matMult(B, result=self._matrices[2])
         A.axpy(1.0, C, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-
-    def destroy(self) -> None:
-        for mat in self._matrices or ():
-            if mat is not None:
-                mat.destroy()
-        self._matrices = None

@@ -12,7 +12,7 @@ large against its round-off):
 * u_z = 0 on both faces: plane strain, against the plane-strain ring; t = size. The two meshes
   differ (the 2D one is structured, the 3D one not), so the difference falls as both are refined:
   checked within 0.5 % at size 0.11 (the default mesh is 0.22), both runs converged to 1e-6 of
-  ||F_int|` (``RTOL``; at the scene's 1e-3 the slice's force strays by up to 1.5 % at single
+  ``||F_int||`` (``RTOL``; at the scene's 1e-3 the slice's force strays by up to 1.5 % at single
   increments, Newton's tolerance and not the discretisation).
 * u_z = 0 on both faces of a slice of Q2 hexahedra, one layer of t = size, whose section is the
   plane-strain ring's grid as Q2 quadrilaterals (:func:`section`): the 3D space holds the 2D
